@@ -1,0 +1,211 @@
+#include "intake/intake.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <sstream>
+#include <unordered_map>
+
+#include "core/error.h"
+#include "intake/repair.h"
+
+namespace qgp {
+namespace {
+
+std::string point_text(const Vec3& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+// Drops the given edge-connected components, or refuses the mesh when dropping is not allowed.
+void drop_or_refuse(TriangleSoup& soup, const std::vector<int>& bad_components,
+                    const std::string& what, bool allow_drop, IntakeResult& result,
+                    const std::string& repair_kind) {
+  int num_components = 0;
+  const std::vector<int> component = edge_connected_components(soup, &num_components);
+  std::vector<char> bad(num_components, 0);
+  for (int c : bad_components) bad[c] = 1;
+  if (!allow_drop)
+    throw Error(ErrorCode::InvalidMesh,
+                what + "; the mesh is refused (repair it, or allow dropping the affected parts)");
+  std::vector<char> keep(soup.triangles.size());
+  for (size_t t = 0; t < keep.size(); ++t) keep[t] = !bad[component[t]];
+  keep_triangles(soup, keep);
+  result.repairs.push_back({repair_kind, static_cast<int>(bad_components.size())});
+  result.warnings.push_back(what + "; " + std::to_string(bad_components.size()) +
+                            " affected component(s) were dropped");
+  if (soup.triangles.empty())
+    throw Error(ErrorCode::InvalidMesh, what + "; no usable component is left");
+}
+
+void classify_components(IntakeResult& result) {
+  const TriMesh& mesh = result.mesh;
+  std::vector<int> comp(mesh.num_faces(), -1);
+  std::vector<int> stack;
+  for (int seed = 0; seed < mesh.num_faces(); ++seed) {
+    if (comp[seed] >= 0) continue;
+    const int id = static_cast<int>(result.components.size());
+    result.components.emplace_back();
+    comp[seed] = id;
+    stack.push_back(seed);
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      result.components[id].faces.push_back(f);
+      for (int k = 0; k < 3; ++k) {
+        const int o = mesh.opposite[3 * f + k];
+        if (o >= 0 && comp[o / 3] < 0) {
+          comp[o / 3] = id;
+          stack.push_back(o / 3);
+        }
+      }
+    }
+  }
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const int h = mesh.vertex_halfedge[v];
+    if (h >= 0) ++result.components[comp[h / 3]].num_vertices;
+  }
+  for (int e = 0; e < mesh.num_edges(); ++e) ++result.components[comp[mesh.edge_halfedge[e] / 3]].num_edges;
+  std::vector<char> seen(mesh.num_halfedges(), 0);
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    if (mesh.opposite[h] >= 0 || seen[h]) continue;
+    ++result.components[comp[h / 3]].boundary_loops;
+    for (int c = h; c >= 0 && !seen[c]; c = mesh.vertex_halfedge[mesh.to(c)]) seen[c] = 1;
+  }
+  for (ComponentInfo& c : result.components) {
+    c.num_faces = static_cast<int>(c.faces.size());
+    std::sort(c.faces.begin(), c.faces.end());
+    c.euler_characteristic = c.num_vertices - c.num_edges + c.num_faces;
+    c.genus = (2 - c.euler_characteristic - c.boundary_loops) / 2;
+  }
+}
+
+}  // namespace
+
+IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, Progress& progress) {
+  progress.begin_stage("intake");
+  IntakeResult result;
+  result.input_vertices = input.num_vertices();
+  result.input_faces = input.num_faces();
+  validate_soup(input);
+
+  TriangleSoup soup;
+  auto note = [&](const char* kind, int count) {
+    if (count > 0) result.repairs.push_back({kind, count});
+  };
+  note("triangulated_polygons", triangulate_polygons(input, soup));
+  note("unreferenced_vertices", remove_unreferenced_vertices(soup));
+  note("duplicate_faces", remove_duplicate_faces(soup));
+  progress.update(0.2);
+
+  const auto nonmanifold = find_nonmanifold_edges(soup);
+  if (!nonmanifold.empty()) {
+    int num_components = 0;
+    const std::vector<int> component = edge_connected_components(soup, &num_components);
+    std::unordered_map<uint64_t, char> is_bad_edge;
+    for (auto e : nonmanifold) is_bad_edge[static_cast<uint64_t>(e[0]) << 32 | static_cast<uint32_t>(e[1])] = 1;
+    std::vector<char> bad(num_components, 0);
+    for (size_t t = 0; t < soup.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        int a = soup.triangles[t][k], b = soup.triangles[t][(k + 1) % 3];
+        if (a > b) std::swap(a, b);
+        if (is_bad_edge.count(static_cast<uint64_t>(a) << 32 | static_cast<uint32_t>(b))) bad[component[t]] = 1;
+      }
+    std::vector<int> bad_list;
+    for (int c = 0; c < num_components; ++c)
+      if (bad[c]) bad_list.push_back(c);
+    const auto& first = nonmanifold.front();
+    drop_or_refuse(soup, bad_list,
+                   std::to_string(nonmanifold.size()) +
+                       " non-manifold edge(s) (shared by more than two faces), the first between input vertices " +
+                       std::to_string(soup.input_vertex[first[0]]) + " and " +
+                       std::to_string(soup.input_vertex[first[1]]) + " at " +
+                       point_text(soup.positions[first[0]]),
+                   options.drop_bad_components, result, "dropped_nonmanifold_components");
+  }
+  progress.update(0.35);
+
+  std::vector<int> non_orientable;
+  note("inconsistent_orientation", orient_consistently(soup, &non_orientable));
+  if (!non_orientable.empty()) {
+    drop_or_refuse(soup, non_orientable,
+                   std::to_string(non_orientable.size()) + " non-orientable component(s)",
+                   options.drop_bad_components, result, "dropped_nonorientable_components");
+  }
+  note("nonmanifold_vertices", split_nonmanifold_vertices(soup));
+  progress.update(0.5);
+
+  int unrepaired = 0;
+  note("zero_area_faces", repair_zero_area_faces(soup, options.zero_area, options.flatness, &unrepaired));
+  if (unrepaired > 0)
+    result.warnings.push_back(std::to_string(unrepaired) + " zero-area face(s) could not be repaired");
+  remove_unreferenced_vertices(soup);  // vertices orphaned by collapses
+  progress.update(0.7);
+
+  TriMesh& mesh = result.mesh;
+  mesh.V.resize(static_cast<int>(soup.positions.size()), 3);
+  for (size_t v = 0; v < soup.positions.size(); ++v) mesh.V.row(v) = soup.positions[v].transpose();
+  mesh.F.resize(static_cast<int>(soup.triangles.size()), 3);
+  for (size_t t = 0; t < soup.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) mesh.F(t, k) = soup.triangles[t][k];
+  result.input_vertex = std::move(soup.input_vertex);
+  result.input_face = std::move(soup.input_face);
+  try {
+    build_connectivity(mesh);
+  } catch (const Error& e) {  // the repair steps above guarantee a manifold; this is a bug
+    throw Error(ErrorCode::Internal, std::string("intake left a non-manifold mesh: ") + e.what());
+  }
+  classify_components(result);
+  progress.update(1.0);
+  return result;
+}
+
+Json intake_report(const IntakeResult& r) {
+  Json input;
+  input["vertices"] = r.mesh.num_vertices();
+  input["faces"] = r.mesh.num_faces();
+  input["input_vertices"] = r.input_vertices;
+  input["input_faces"] = r.input_faces;
+  input["components"] = r.components.size();
+  Json loops = Json::array(), genus = Json::array(), chi = Json::array(), faces = Json::array();
+  for (const ComponentInfo& c : r.components) {
+    loops.push_back(c.boundary_loops);
+    genus.push_back(c.genus);
+    chi.push_back(c.euler_characteristic);
+    faces.push_back(c.num_faces);
+  }
+  input["boundary_loops"] = loops;
+  input["genus"] = genus;
+  input["euler_characteristic"] = chi;
+  input["component_faces"] = faces;
+  Json repairs = Json::array();
+  for (const Repair& rep : r.repairs) repairs.push_back({{"kind", rep.kind}, {"count", rep.count}});
+  input["repairs"] = repairs;
+  input["warnings"] = r.warnings;
+  return input;
+}
+
+std::vector<char> map_input_edges(const IntakeResult& intake,
+                                  const std::vector<std::array<int, 2>>& input_pairs, int* unmatched) {
+  const TriMesh& mesh = intake.mesh;
+  auto key = [](int a, int b) {
+    return static_cast<uint64_t>(std::min(a, b)) << 32 | static_cast<uint32_t>(std::max(a, b));
+  };
+  std::unordered_multimap<uint64_t, int> by_input;
+  by_input.reserve(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e];
+    by_input.emplace(key(intake.input_vertex[mesh.from(h)], intake.input_vertex[mesh.to(h)]), e);
+  }
+  std::vector<char> marked(mesh.num_edges(), 0);
+  int missing = 0;
+  for (const auto& p : input_pairs) {
+    auto range = by_input.equal_range(key(p[0], p[1]));
+    if (range.first == range.second) ++missing;
+    for (auto it = range.first; it != range.second; ++it) marked[it->second] = 1;
+  }
+  if (unmatched) *unmatched = missing;
+  return marked;
+}
+
+}  // namespace qgp

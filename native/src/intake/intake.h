@@ -1,0 +1,61 @@
+// Mesh intake: validate a polygon soup, repair what is safely repairable (reporting each repair
+// with a count), split it into connected components and classify them.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/json.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "intake/polygon_soup.h"
+
+namespace qgp {
+
+struct IntakeOptions {
+  // Non-manifold edges or non-orientable parts: false refuses the mesh (Error InvalidMesh),
+  // true drops the affected connected components, keeps the rest and says so in the report.
+  bool drop_bad_components = false;
+  // A face is zero-area when area <= zero_area * diag^2 (diag: bounding-box diagonal)
+  // or 2*area <= flatness * (longest edge)^2.
+  double zero_area = 1e-12;
+  double flatness = 1e-10;
+};
+
+struct Repair {
+  std::string kind;  // unreferenced_vertices, duplicate_faces, zero_area_faces, ...
+  int count = 0;
+};
+
+struct ComponentInfo {
+  std::vector<int> faces;  // faces of IntakeResult::mesh in this component
+  int num_vertices = 0, num_edges = 0, num_faces = 0;
+  int boundary_loops = 0;
+  int euler_characteristic = 0;  // V - E + F
+  int genus = 0;                 // (2 - chi - boundary_loops) / 2
+  bool closed() const { return boundary_loops == 0; }
+};
+
+struct IntakeResult {
+  TriMesh mesh;                    // repaired, oriented, manifold; connectivity built
+  std::vector<int> input_vertex;   // per mesh vertex: its index in the input soup
+  std::vector<int> input_face;     // per mesh face: the input face (polygon) it came from
+  std::vector<ComponentInfo> components;
+  std::vector<Repair> repairs;     // only repairs that happened (count > 0)
+  std::vector<std::string> warnings;
+  int input_vertices = 0, input_faces = 0;
+};
+
+// Throws Error(InvalidMesh) naming what is wrong when the input is unusable.
+IntakeResult run_intake(const PolygonSoup& soup, const IntakeOptions& options, Progress& progress);
+
+// The "input" object of the JSON report.
+Json intake_report(const IntakeResult& result);
+
+// Marks the mesh edges whose endpoints are the given input vertex pairs. Pairs that match no
+// edge (not adjacent in the input, or removed by a repair) are counted in *unmatched.
+std::vector<char> map_input_edges(const IntakeResult& intake,
+                                  const std::vector<std::array<int, 2>>& input_pairs,
+                                  int* unmatched);
+
+}  // namespace qgp
