@@ -1,0 +1,180 @@
+// qgp: command-line front end of the native pipeline, for batch use and tests.
+//
+// Exit codes: 0 success, 1 bad command line, 2 unusable input (with a one-line reason on
+// stderr), 3 a pipeline stage failed or is not built yet, 4 internal error.
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/json.h"
+#include "intake/read_mesh_file.h"
+#include "pipeline/session.h"
+
+namespace {
+
+const char* kUsage =
+    "usage:\n"
+    "  qgp info IN [--report R.json] [--drop-bad-components]\n"
+    "  qgp remesh IN -o OUT.obj [--faces N | --edge-length L] [--sharp-angle DEG]\n"
+    "             [--features FILE] [--uv-out UV.obj] [--layout-out LAYOUT.obj]\n"
+    "             [--report R.json] [--quantizer greedy|round] [--drop-bad-components]\n"
+    "IN: .obj, .ply or .off. --features FILE: one vertex-index pair per line (0-based).\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct CommandLine {
+  std::string command, input, output, report, features, uv_out, layout_out;
+  qgp::RemeshOptions options;
+};
+
+double parse_number(const std::string& flag, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0') throw UsageError(flag + " expects a number, got '" + text + "'");
+  return v;
+}
+
+CommandLine parse(int argc, char** argv) {
+  if (argc < 3) throw UsageError("missing command or input file");
+  CommandLine cl;
+  cl.command = argv[1];
+  if (cl.command != "info" && cl.command != "remesh") throw UsageError("unknown command '" + cl.command + "'");
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw UsageError(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--report") cl.report = value();
+    else if (arg == "--drop-bad-components") cl.options.drop_bad_components = true;
+    else if (cl.command == "remesh" && (arg == "-o" || arg == "--output")) cl.output = value();
+    else if (cl.command == "remesh" && arg == "--faces") cl.options.target_faces = parse_number(arg, value());
+    else if (cl.command == "remesh" && arg == "--edge-length") cl.options.edge_length = parse_number(arg, value());
+    else if (cl.command == "remesh" && arg == "--sharp-angle") cl.options.sharp_angle_deg = parse_number(arg, value());
+    else if (cl.command == "remesh" && arg == "--features") cl.features = value();
+    else if (cl.command == "remesh" && arg == "--uv-out") cl.uv_out = value();
+    else if (cl.command == "remesh" && arg == "--layout-out") cl.layout_out = value();
+    else if (cl.command == "remesh" && arg == "--quantizer") {
+      const std::string q = value();
+      if (q != "greedy" && q != "round") throw UsageError("--quantizer must be greedy or round");
+      cl.options.quantizer = qgp::parse_quantizer(q);
+    } else if (!arg.empty() && arg[0] == '-') throw UsageError("unknown option '" + arg + "'");
+    else if (cl.input.empty()) cl.input = arg;
+    else throw UsageError("unexpected argument '" + arg + "'");
+  }
+  if (cl.input.empty()) throw UsageError("missing input file");
+  if (cl.command == "remesh" && cl.output.empty()) throw UsageError("remesh needs -o OUT.obj");
+  if (cl.options.target_faces > 0 && cl.options.edge_length > 0)
+    throw UsageError("give --faces or --edge-length, not both");
+  if (cl.options.target_faces < 0 || cl.options.edge_length < 0)
+    throw UsageError("--faces and --edge-length must be positive");
+  return cl;
+}
+
+std::vector<std::array<int, 2>> read_feature_pairs(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw qgp::Error(qgp::ErrorCode::UnreadableFile, "cannot read features file '" + path + "'");
+  std::vector<std::array<int, 2>> pairs;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    long long a, b;
+    if (!(ls >> a)) continue;  // blank or comment line
+    std::string rest;
+    if (!(ls >> b) || (ls >> rest) || a < 0 || b < 0 || a > INT32_MAX || b > INT32_MAX)
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "features file '" + path + "' line " +
+                                                            std::to_string(line_no) +
+                                                            ": expected two vertex indices");
+    pairs.push_back({static_cast<int>(a), static_cast<int>(b)});
+  }
+  return pairs;
+}
+
+void write_report(const std::string& path, const qgp::Json& report) {
+  if (path.empty()) return;
+  std::ofstream out(path);
+  if (!out) {
+    std::cerr << "qgp: cannot write report '" << path << "'\n";
+    return;
+  }
+  out << report.dump(2) << "\n";
+}
+
+void print_intake_summary(const qgp::Json& report) {
+  if (!report.contains("input")) return;
+  const qgp::Json& in = report["input"];
+  std::cout << "vertices " << in["vertices"] << ", faces " << in["faces"] << " (input "
+            << in["input_vertices"] << " / " << in["input_faces"] << ")\n";
+  std::cout << "components " << in["components"] << ", genus " << in["genus"].dump()
+            << ", boundary loops " << in["boundary_loops"].dump() << "\n";
+  for (const auto& r : in["repairs"]) std::cout << "repair " << r["kind"].get<std::string>() << ": " << r["count"] << "\n";
+  for (const auto& w : in["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";
+}
+
+int exit_code_for(qgp::ErrorCode code) {
+  switch (code) {
+    case qgp::ErrorCode::InvalidMesh:
+    case qgp::ErrorCode::UnreadableFile: return 2;
+    case qgp::ErrorCode::InvalidArgument: return 1;
+    case qgp::ErrorCode::NotBuilt:
+    case qgp::ErrorCode::StageFailed:
+    case qgp::ErrorCode::Cancelled: return 3;
+    default: return 4;
+  }
+}
+
+int run(const CommandLine& cl) {
+  qgp::Json report;
+  std::unique_ptr<qgp::Session> session;
+  try {
+    session = std::make_unique<qgp::Session>(qgp::read_mesh_file(cl.input));
+    qgp::RemeshOptions options = cl.options;
+    if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
+    session->set_options(options);
+    qgp::Progress progress;
+    session->run(cl.command == "info" ? qgp::Job::Intake : qgp::Job::Remesh, progress);
+    report = session->report();
+  } catch (const qgp::Error& e) {
+    report = session ? session->report() : qgp::Json::object();
+    report["status"] = "error";
+    report["error"] = {{"code", qgp::error_code_name(e.code())}, {"message", e.what()}};
+    report["file"] = cl.input;
+    if (cl.command == "info") print_intake_summary(report);
+    write_report(cl.report, report);
+    std::cerr << "qgp: " << e.what() << "\n";
+    return exit_code_for(e.code());
+  }
+  report["file"] = cl.input;
+  if (cl.command == "info") print_intake_summary(report);
+  write_report(cl.report, report);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CommandLine cl;
+  try {
+    cl = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "qgp: " << e.what() << "\n" << kUsage;
+    return 1;
+  }
+  try {
+    return run(cl);
+  } catch (const std::exception& e) {
+    std::cerr << "qgp: internal error: " << e.what() << "\n";
+    return 4;
+  }
+}

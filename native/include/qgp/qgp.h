@@ -1,0 +1,113 @@
+/* Quantized Retopo C API: the only interface the Blender add-on (ctypes) sees.
+ *
+ * Usage: create a session from arrays (or a file), set options and features, start a job on the
+ * native worker thread, poll it (stage + fraction) until it is no longer running, then fetch the
+ * results into caller-provided arrays and read the JSON report. Free the session at the end.
+ *
+ * Every function returns a qgp_status; on failure the message is available from
+ * qgp_last_error() (any call, this thread) and, for session calls, qgp_session_error().
+ * No function throws, aborts or exits. Poll, cancel and free are safe while a job runs; a cancel
+ * takes effect within about a second. Array shapes are given at each declaration (row-major).
+ */
+#ifndef QGP_QGP_H
+#define QGP_QGP_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define QGP_API __attribute__((visibility("default")))
+
+typedef struct qgp_session qgp_session;
+
+typedef enum qgp_status {
+  QGP_OK = 0,
+  QGP_ERR_INVALID_ARGUMENT = 1, /* malformed call: null pointer, bad option, wrong size */
+  QGP_ERR_INVALID_MESH = 2,     /* the mesh is unusable (NaN, bad index, non-manifold, ...) */
+  QGP_ERR_UNREADABLE_FILE = 3,  /* the file cannot be opened or parsed */
+  QGP_ERR_NOT_BUILT = 4,        /* a requested pipeline stage does not exist yet */
+  QGP_ERR_STAGE_FAILED = 5,     /* a stage ran but produced no valid result */
+  QGP_ERR_CANCELLED = 6,        /* the job was cancelled */
+  QGP_ERR_BUSY = 7,             /* a job is running on this session */
+  QGP_ERR_INTERNAL = 8,         /* unexpected internal error (a bug) */
+  QGP_ERR_NOT_READY = 9         /* no result of that kind is available */
+} qgp_status;
+
+typedef enum qgp_job {
+  QGP_JOB_INTAKE = 0,  /* validate, repair, classify */
+  QGP_JOB_REMESH = 1,  /* the whole pipeline up to the quad mesh */
+  QGP_JOB_GRID_UV = 2  /* the whole pipeline up to the integer-grid map */
+} qgp_job;
+
+typedef enum qgp_job_state {
+  QGP_STATE_IDLE = 0,
+  QGP_STATE_RUNNING = 1,
+  QGP_STATE_DONE = 2,
+  QGP_STATE_FAILED = 3,
+  QGP_STATE_CANCELLED = 4
+} qgp_job_state;
+
+/* Library version, e.g. "0.1.0". */
+QGP_API const char* qgp_version(void);
+
+/* Message of the last failed call on the calling thread ("" if none). Valid until the next call. */
+QGP_API const char* qgp_last_error(void);
+
+/* vertices: num_vertices x 3 doubles; triangles: num_triangles x 3 vertex indices. The arrays
+ * are copied. Validation happens in the intake job, so a bad mesh is reported there. */
+QGP_API int qgp_session_create(const double* vertices, int64_t num_vertices, const int32_t* triangles,
+                               int64_t num_triangles, qgp_session** out_session);
+
+/* Reads an OBJ / PLY / OFF file into a new session. */
+QGP_API int qgp_session_create_from_file(const char* path, qgp_session** out_session);
+
+/* Cancels and joins a running job, then frees everything. Null is allowed. */
+QGP_API void qgp_session_free(qgp_session* session);
+
+/* Message of the last failed call or job on this session ("" if none). */
+QGP_API const char* qgp_session_error(qgp_session* session);
+
+/* Feature edges (e.g. Blender's marked-sharp edges): num_edges x 2 input vertex indices. */
+QGP_API int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t num_edges);
+
+/* Numeric options: "target_faces", "edge_length", "sharp_angle" (degrees, < 0 = off),
+ * "drop_bad_components" (0/1). A value <= 0 unsets target_faces / edge_length. */
+QGP_API int qgp_session_set_option(qgp_session* session, const char* name, double value);
+
+/* String options: "quantizer" = "greedy" | "round". */
+QGP_API int qgp_session_set_option_string(qgp_session* session, const char* name, const char* value);
+
+/* Starts a job (qgp_job) on the worker thread. QGP_ERR_BUSY if one is running. */
+QGP_API int qgp_job_start(qgp_session* session, int job);
+
+/* state: qgp_job_state; fraction: of the current stage, in [0,1]; stage: NUL-terminated stage
+ * name copied into stage_buffer (truncated to stage_buffer_size). Any output may be null. */
+QGP_API int qgp_job_poll(qgp_session* session, int* state, double* fraction, char* stage_buffer,
+                         int64_t stage_buffer_size);
+
+/* Requests cancellation of the running job (no-op when none runs). */
+QGP_API int qgp_job_cancel(qgp_session* session);
+
+/* Waits up to timeout_seconds (< 0: forever) for the job to end; state as in qgp_job_poll.
+ * Returns the job's own status when it has ended (QGP_OK, or its error code). */
+QGP_API int qgp_job_wait(qgp_session* session, double timeout_seconds, int* state);
+
+/* The JSON report of the last job. Copies at most buffer_size bytes including the NUL into
+ * buffer (which may be null); *needed receives the full size including the NUL. */
+QGP_API int qgp_report_json(qgp_session* session, char* buffer, int64_t buffer_size, int64_t* needed);
+
+/* The repaired mesh of the last intake: vertex and triangle counts, then the arrays
+ * (vertices: nv x 3 doubles; triangles: nf x 3; component: nf component ids;
+ *  input_vertex: nv input indices). Any array pointer may be null. */
+QGP_API int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
+                              int64_t* num_components);
+QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
+                             int32_t* component, int32_t* input_vertex);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* QGP_QGP_H */

@@ -1,0 +1,353 @@
+// C API implementation: a worker thread per job, every exception turned into a status code.
+#include "qgp/qgp.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <string>
+#include <thread>
+
+#include "core/error.h"
+#include "intake/read_mesh_file.h"
+#include "pipeline/session.h"
+
+struct qgp_session {
+  std::unique_ptr<qgp::Session> session;
+  std::thread worker;
+  std::atomic<bool> cancel{false};
+  std::mutex mutex;  // guards everything below
+  std::condition_variable finished;
+  int state = QGP_STATE_IDLE;
+  int job_status = QGP_OK;
+  std::string stage;
+  double fraction = 0;
+  std::string error;
+  std::string report_json = "{}";
+};
+
+namespace {
+
+thread_local std::string t_last_error;
+thread_local std::string t_session_error;
+
+int status_of(qgp::ErrorCode code) { return static_cast<int>(code); }
+
+int fail(qgp_session* s, int status, const std::string& message) {
+  t_last_error = message;
+  if (s) {
+    std::lock_guard<std::mutex> lock(s->mutex);
+    s->error = message;
+  }
+  return status;
+}
+
+// Runs fn, mapping every exception to a status code and message.
+template <class Fn>
+int guarded(qgp_session* s, Fn fn) noexcept {
+  try {
+    t_last_error.clear();
+    return fn();
+  } catch (const qgp::Error& e) {
+    return fail(s, status_of(e.code()), e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(s, QGP_ERR_INTERNAL, "out of memory");
+  } catch (const std::exception& e) {
+    return fail(s, QGP_ERR_INTERNAL, std::string("internal error: ") + e.what());
+  } catch (...) {
+    return fail(s, QGP_ERR_INTERNAL, "internal error: unknown exception");
+  }
+}
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw qgp::Error(qgp::ErrorCode::InvalidArgument, message);
+}
+
+bool is_running(qgp_session* s) {
+  std::lock_guard<std::mutex> lock(s->mutex);
+  return s->state == QGP_STATE_RUNNING;
+}
+
+void require_idle(qgp_session* s) {
+  if (is_running(s)) throw qgp::Error(qgp::ErrorCode::Busy, "a job is running on this session");
+}
+
+void join_worker(qgp_session* s) {
+  if (s->worker.joinable()) s->worker.join();
+}
+
+void run_job(qgp_session* s, qgp::Job job) {
+  int status = QGP_OK;
+  std::string message;
+  qgp::Progress progress(
+      [s](const std::string& stage, double fraction) {
+        std::lock_guard<std::mutex> lock(s->mutex);
+        s->stage = stage;
+        s->fraction = fraction;
+      },
+      &s->cancel);
+  try {
+    s->session->run(job, progress);
+  } catch (const qgp::Error& e) {
+    status = status_of(e.code());
+    message = e.what();
+  } catch (const std::bad_alloc&) {
+    status = QGP_ERR_INTERNAL;
+    message = "out of memory";
+  } catch (const std::exception& e) {
+    status = QGP_ERR_INTERNAL;
+    message = std::string("internal error: ") + e.what();
+  } catch (...) {
+    status = QGP_ERR_INTERNAL;
+    message = "internal error: unknown exception";
+  }
+  std::string report;
+  try {
+    report = s->session->report().dump(2);
+  } catch (...) {
+    report = "{\"status\": \"error\"}";
+  }
+  std::lock_guard<std::mutex> lock(s->mutex);
+  s->job_status = status;
+  s->error = message;
+  s->report_json = std::move(report);
+  s->state = status == QGP_OK ? QGP_STATE_DONE
+             : status == QGP_ERR_CANCELLED ? QGP_STATE_CANCELLED
+                                           : QGP_STATE_FAILED;
+  s->fraction = status == QGP_OK ? 1.0 : s->fraction;
+  s->finished.notify_all();
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* qgp_version(void) { return QGP_VERSION; }
+
+const char* qgp_last_error(void) { return t_last_error.c_str(); }
+
+int qgp_session_create(const double* vertices, int64_t num_vertices, const int32_t* triangles,
+                       int64_t num_triangles, qgp_session** out_session) {
+  return guarded(nullptr, [&] {
+    require(out_session != nullptr, "out_session is null");
+    *out_session = nullptr;
+    require(num_vertices >= 0 && num_triangles >= 0, "counts must not be negative");
+    require(num_vertices < std::numeric_limits<int32_t>::max() / 3 &&
+                num_triangles < std::numeric_limits<int32_t>::max() / 3,
+            "mesh too large (more than 700 million elements)");
+    require(num_vertices == 0 || vertices != nullptr, "vertices is null");
+    require(num_triangles == 0 || triangles != nullptr, "triangles is null");
+    auto s = std::make_unique<qgp_session>();
+    s->session = std::make_unique<qgp::Session>(
+        qgp::soup_from_triangle_arrays(vertices, num_vertices, triangles, num_triangles));
+    *out_session = s.release();
+    return QGP_OK;
+  });
+}
+
+int qgp_session_create_from_file(const char* path, qgp_session** out_session) {
+  return guarded(nullptr, [&] {
+    require(out_session != nullptr, "out_session is null");
+    *out_session = nullptr;
+    require(path != nullptr, "path is null");
+    auto s = std::make_unique<qgp_session>();
+    s->session = std::make_unique<qgp::Session>(qgp::read_mesh_file(path));
+    *out_session = s.release();
+    return QGP_OK;
+  });
+}
+
+void qgp_session_free(qgp_session* session) {
+  if (!session) return;
+  session->cancel = true;
+  join_worker(session);
+  delete session;
+}
+
+const char* qgp_session_error(qgp_session* session) {
+  if (!session) return "session is null";
+  std::lock_guard<std::mutex> lock(session->mutex);
+  t_session_error = session->error;
+  return t_session_error.c_str();
+}
+
+int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t num_edges) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require(num_edges >= 0, "num_edges is negative");
+    require(num_edges == 0 || edges != nullptr, "edges is null");
+    require_idle(session);
+    qgp::RemeshOptions options = session->session->options();
+    options.feature_edges.resize(static_cast<size_t>(num_edges));
+    for (int64_t i = 0; i < num_edges; ++i) options.feature_edges[i] = {edges[2 * i], edges[2 * i + 1]};
+    session->session->set_options(options);
+    return QGP_OK;
+  });
+}
+
+int qgp_session_set_option(qgp_session* session, const char* name, double value) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require(name != nullptr, "option name is null");
+    require_idle(session);
+    qgp::RemeshOptions options = session->session->options();
+    const std::string key = name;
+    if (key == "target_faces") {
+      options.target_faces = value;
+      if (value > 0) options.edge_length = 0;
+    } else if (key == "edge_length") {
+      options.edge_length = value;
+      if (value > 0) options.target_faces = 0;
+    } else if (key == "sharp_angle") {
+      options.sharp_angle_deg = value;
+    } else if (key == "drop_bad_components") {
+      options.drop_bad_components = value != 0;
+    } else {
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument,
+                       "unknown option '" + key + "' (target_faces, edge_length, sharp_angle, drop_bad_components)");
+    }
+    session->session->set_options(options);
+    return QGP_OK;
+  });
+}
+
+int qgp_session_set_option_string(qgp_session* session, const char* name, const char* value) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require(name != nullptr && value != nullptr, "option name or value is null");
+    require_idle(session);
+    qgp::RemeshOptions options = session->session->options();
+    if (std::string(name) == "quantizer") {
+      options.quantizer = qgp::parse_quantizer(value);
+    } else {
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "unknown string option '" + std::string(name) + "' (quantizer)");
+    }
+    session->session->set_options(options);
+    return QGP_OK;
+  });
+}
+
+int qgp_job_start(qgp_session* session, int job) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require(job == QGP_JOB_INTAKE || job == QGP_JOB_REMESH || job == QGP_JOB_GRID_UV,
+            "unknown job " + std::to_string(job));
+    require_idle(session);
+    join_worker(session);
+    {
+      std::lock_guard<std::mutex> lock(session->mutex);
+      session->state = QGP_STATE_RUNNING;
+      session->job_status = QGP_OK;
+      session->stage = "starting";
+      session->fraction = 0;
+      session->error.clear();
+    }
+    session->cancel = false;
+    const qgp::Job kind = job == QGP_JOB_INTAKE   ? qgp::Job::Intake
+                          : job == QGP_JOB_REMESH ? qgp::Job::Remesh
+                                                  : qgp::Job::GridUV;
+    try {
+      session->worker = std::thread(run_job, session, kind);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(session->mutex);
+      session->state = QGP_STATE_FAILED;
+      throw;
+    }
+    return QGP_OK;
+  });
+}
+
+int qgp_job_poll(qgp_session* session, int* state, double* fraction, char* stage_buffer,
+                 int64_t stage_buffer_size) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    std::lock_guard<std::mutex> lock(session->mutex);
+    if (state) *state = session->state;
+    if (fraction) *fraction = session->fraction;
+    if (stage_buffer && stage_buffer_size > 0) {
+      const size_t n = std::min<size_t>(session->stage.size(), static_cast<size_t>(stage_buffer_size - 1));
+      std::memcpy(stage_buffer, session->stage.data(), n);
+      stage_buffer[n] = '\0';
+    }
+    return QGP_OK;
+  });
+}
+
+int qgp_job_cancel(qgp_session* session) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    session->cancel = true;
+    return QGP_OK;
+  });
+}
+
+int qgp_job_wait(qgp_session* session, double timeout_seconds, int* state) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    std::unique_lock<std::mutex> lock(session->mutex);
+    auto done = [&] { return session->state != QGP_STATE_RUNNING; };
+    if (timeout_seconds < 0) {
+      session->finished.wait(lock, done);
+    } else {
+      session->finished.wait_for(lock, std::chrono::duration<double>(timeout_seconds), done);
+    }
+    if (state) *state = session->state;
+    if (session->state == QGP_STATE_RUNNING) return static_cast<int>(QGP_OK);
+    if (session->job_status != QGP_OK) t_last_error = session->error;
+    return session->job_status;
+  });
+}
+
+int qgp_report_json(qgp_session* session, char* buffer, int64_t buffer_size, int64_t* needed) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    std::lock_guard<std::mutex> lock(session->mutex);
+    const std::string& json = session->report_json;
+    if (needed) *needed = static_cast<int64_t>(json.size()) + 1;
+    if (buffer && buffer_size > 0) {
+      const size_t n = std::min<size_t>(json.size(), static_cast<size_t>(buffer_size - 1));
+      std::memcpy(buffer, json.data(), n);
+      buffer[n] = '\0';
+    }
+    return QGP_OK;
+  });
+}
+
+int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
+                      int64_t* num_components) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::IntakeResult* intake = session->session->intake();
+    if (!intake) throw qgp::Error(qgp::ErrorCode::InvalidArgument, "no intake result: run a job first");
+    if (num_vertices) *num_vertices = intake->mesh.num_vertices();
+    if (num_triangles) *num_triangles = intake->mesh.num_faces();
+    if (num_components) *num_components = static_cast<int64_t>(intake->components.size());
+    return QGP_OK;
+  });
+}
+
+int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* component,
+                     int32_t* input_vertex) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::IntakeResult* intake = session->session->intake();
+    if (!intake) throw qgp::Error(qgp::ErrorCode::InvalidArgument, "no intake result: run a job first");
+    const qgp::TriMesh& mesh = intake->mesh;
+    if (vertices) std::memcpy(vertices, mesh.V.data(), sizeof(double) * 3 * mesh.num_vertices());
+    if (triangles) std::memcpy(triangles, mesh.F.data(), sizeof(int32_t) * 3 * mesh.num_faces());
+    if (component)
+      for (size_t c = 0; c < intake->components.size(); ++c)
+        for (int f : intake->components[c].faces) component[f] = static_cast<int32_t>(c);
+    if (input_vertex) std::copy(intake->input_vertex.begin(), intake->input_vertex.end(), input_vertex);
+    return QGP_OK;
+  });
+}
+
+}  // extern "C"

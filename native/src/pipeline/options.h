@@ -1,0 +1,26 @@
+// Options of a remesh / grid-UV job, shared by the C API, the CLI and the add-on.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+namespace qgp {
+
+enum class Quantizer { Greedy, Round };
+
+struct RemeshOptions {
+  double target_faces = 0;      // desired quad count; <= 0: unset
+  double edge_length = 0;       // desired quad edge length (model units); <= 0: unset
+  double sharp_angle_deg = -1;  // dihedral angle above which an edge is a feature; < 0: off
+  std::vector<std::array<int, 2>> feature_edges;  // input vertex index pairs (marked sharp)
+  Quantizer quantizer = Quantizer::Greedy;
+  bool drop_bad_components = false;  // drop non-manifold / non-orientable parts instead of refusing
+
+  static constexpr double kDefaultTargetFaces = 2000;
+};
+
+// Parses "greedy" / "round"; throws Error(InvalidArgument) otherwise.
+Quantizer parse_quantizer(const std::string& name);
+const char* quantizer_name(Quantizer q);
+
+}  // namespace qgp
