@@ -1,0 +1,230 @@
+// Intake over the whole shared mesh set: classification as in the meshes' README, repairs
+// reported, broken meshes refused with clear messages, plus focused repair cases.
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "core/error.h"
+#include "intake/intake.h"
+#include "intake/read_mesh_file.h"
+#include "test_support.h"
+
+namespace qgp {
+namespace {
+
+struct Expected {
+  int components;
+  std::vector<int> genus;           // per component (empty: not checked)
+  std::vector<int> boundary_loops;  // per component (empty: not checked)
+};
+
+// From ../shared/meshes/README.md (manifold meshes; genus and boundary loops per component).
+const std::map<std::string, Expected>& expected_table() {
+  static const std::map<std::string, Expected> table = {
+      {"spot.obj", {1, {0}, {0}}},          {"bunny.off", {1, {0}, {0}}},
+      {"armadillo.obj", {1, {0}, {0}}},     {"nefertiti.obj", {1, {0}, {0}}},
+      {"igea.ply", {1, {0}, {0}}},          {"dragon-genus1.obj", {1, {1}, {0}}},
+      {"torus.obj", {1, {1}, {0}}},         {"rocker-arm.obj", {1, {1}, {0}}},
+      {"kitten.obj", {1, {1}, {0}}},        {"fertility.off", {1, {4}, {0}}},
+      {"mnf07HeadFem_rem_rem_p.obj", {1, {9}, {0}}},
+      {"fandisk.obj", {1, {0}, {0}}},       {"block.obj", {1, {3}, {0}}},
+      {"joint.obj", {1, {2}, {0}}},         {"joint_rem_p.obj", {1, {2}, {0}}},
+      {"wingnut.obj", {1, {0}, {0}}},       {"stanford-bunny.obj", {1, {0}, {5}}},
+      {"face.obj", {1, {0}, {1}}},          {"camelhead.off", {1, {0}, {1}}},
+      {"decimated-max.obj", {1, {0}, {0}}}, {"beetle.off", {1, {0}, {11}}},
+      {"cow.obj", {1, {0}, {0}}},           {"featuretype.ply", {852, {}, {}}},
+  };
+  return table;
+}
+
+int repair_count(const IntakeResult& r, const std::string& kind) {
+  for (const Repair& rep : r.repairs)
+    if (rep.kind == kind) return rep.count;
+  return 0;
+}
+
+class IntakeOverMeshes : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(IntakeOverMeshes, ClassifiesOrRefusesClearly) {
+  const std::string name = GetParam();
+  Progress progress;
+  PolygonSoup soup = read_mesh_file(test::mesh_path(name));
+  if (name == "truck.obj" || name == "cycloidal.ply") {
+    try {
+      run_intake(soup, IntakeOptions{}, progress);
+      FAIL() << name << " has non-manifold edges and must be refused";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::InvalidMesh);
+      EXPECT_NE(std::string(e.what()).find("non-manifold edge"), std::string::npos) << e.what();
+    }
+    IntakeOptions drop;
+    drop.drop_bad_components = true;
+    const IntakeResult kept = run_intake(soup, drop, progress);
+    EXPECT_GT(repair_count(kept, "dropped_nonmanifold_components"), 0);
+    EXPECT_FALSE(kept.warnings.empty());
+    return;
+  }
+  const IntakeResult r = run_intake(soup, IntakeOptions{}, progress);
+  // Invariants of every accepted mesh: manifold, oriented, consistent Euler characteristic.
+  int faces = 0;
+  for (const ComponentInfo& c : r.components) {
+    faces += c.num_faces;
+    EXPECT_EQ(c.euler_characteristic, 2 - 2 * c.genus - c.boundary_loops);
+    EXPECT_GE(c.genus, 0);
+  }
+  EXPECT_EQ(faces, r.mesh.num_faces());
+  for (int h = 0; h < r.mesh.num_halfedges(); ++h) {
+    const int o = r.mesh.opposite[h];
+    if (o >= 0) EXPECT_EQ(r.mesh.from(h), r.mesh.to(o));
+  }
+  auto it = expected_table().find(name);
+  if (it == expected_table().end()) return;
+  const Expected& e = it->second;
+  ASSERT_EQ(static_cast<int>(r.components.size()), e.components) << name;
+  for (size_t c = 0; c < e.genus.size(); ++c) EXPECT_EQ(r.components[c].genus, e.genus[c]) << name;
+  for (size_t c = 0; c < e.boundary_loops.size(); ++c)
+    EXPECT_EQ(r.components[c].boundary_loops, e.boundary_loops[c]) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedMeshes, IntakeOverMeshes, ::testing::ValuesIn(test::all_mesh_files()),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           for (char& ch : n) if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           return n;
+                         });
+
+TEST(Intake, SpecificRepairs) {
+  EXPECT_EQ(repair_count(test::load_mesh("cow.obj"), "nonmanifold_vertices"), 1);
+  EXPECT_EQ(repair_count(test::load_mesh("block.obj"), "zero_area_faces"), 8);
+  EXPECT_EQ(repair_count(test::load_mesh("ogre.obj"), "zero_area_faces"), 4);
+  EXPECT_EQ(repair_count(test::load_mesh("stanford-bunny.obj"), "unreferenced_vertices"), 1113);
+  EXPECT_EQ(repair_count(test::load_mesh("teapot.obj"), "nonmanifold_vertices"), 38);
+}
+
+TEST(Intake, ReadsPlyTriangleStrips) {
+  // igea.ply stores its faces as one triangle strip; all 268,686 triangles must come back.
+  const PolygonSoup soup = read_mesh_file(test::mesh_path("igea.ply"));
+  EXPECT_EQ(soup.num_vertices(), 134345);
+  EXPECT_EQ(soup.num_faces(), 268686);
+}
+
+PolygonSoup quad_soup() {  // two triangles forming a square
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const int f0[3] = {0, 1, 2}, f1[3] = {0, 2, 3};
+  s.add_face(f0, 3);
+  s.add_face(f1, 3);
+  return s;
+}
+
+ErrorCode intake_error(const PolygonSoup& soup, std::string* message = nullptr) {
+  Progress progress;
+  try {
+    run_intake(soup, IntakeOptions{}, progress);
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.code();
+  }
+  return ErrorCode::Internal;  // means: no error
+}
+
+TEST(Intake, RejectsBadInputWithClearMessages) {
+  std::string msg;
+  PolygonSoup nan = quad_soup();
+  nan.positions[2].y() = std::nan("");
+  EXPECT_EQ(intake_error(nan, &msg), ErrorCode::InvalidMesh);
+  EXPECT_NE(msg.find("vertex 2"), std::string::npos) << msg;
+
+  PolygonSoup range = quad_soup();
+  range.face_vertices[4] = 9;
+  EXPECT_EQ(intake_error(range, &msg), ErrorCode::InvalidMesh);
+  EXPECT_NE(msg.find("refers to vertex 9"), std::string::npos) << msg;
+
+  PolygonSoup repeated = quad_soup();
+  repeated.face_vertices[1] = 0;
+  EXPECT_EQ(intake_error(repeated, &msg), ErrorCode::InvalidMesh);
+  EXPECT_NE(msg.find("repeats vertex 0"), std::string::npos) << msg;
+
+  EXPECT_EQ(intake_error(PolygonSoup{}, &msg), ErrorCode::InvalidMesh);
+  EXPECT_NE(msg.find("no faces"), std::string::npos) << msg;
+}
+
+TEST(Intake, RepairsOrientationDuplicatesAndPolygons) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}, {5, 5, 5}};
+  const int a[4] = {0, 1, 2, 3};    // a quad
+  const int b[3] = {1, 2, 4};       // inconsistently oriented w.r.t. the quad
+  const int c[3] = {2, 4, 5};       // wait: consistent with b
+  const int d[3] = {4, 2, 1};       // duplicate of b (other orientation)
+  s.add_face(a, 4);
+  s.add_face(b, 3);
+  s.add_face(c, 3);
+  s.add_face(d, 3);
+  Progress progress;
+  const IntakeResult r = run_intake(s, IntakeOptions{}, progress);
+  EXPECT_EQ(repair_count(r, "triangulated_polygons"), 1);
+  EXPECT_EQ(repair_count(r, "duplicate_faces"), 1);
+  EXPECT_EQ(repair_count(r, "unreferenced_vertices"), 1);
+  EXPECT_GE(repair_count(r, "inconsistent_orientation"), 1);
+  EXPECT_EQ(r.mesh.num_faces(), 4);
+  ASSERT_EQ(r.components.size(), 1u);
+  EXPECT_EQ(r.components[0].boundary_loops, 1);
+}
+
+TEST(Intake, RefusesNonOrientableMoebiusStrip) {
+  PolygonSoup s;
+  const int n = 8;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    for (int side : {-1, 1}) {
+      const double w = 0.3 * side;
+      s.positions.push_back({(2 + w * std::cos(t / 2)) * std::cos(t), (2 + w * std::cos(t / 2)) * std::sin(t),
+                             w * std::sin(t / 2)});
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i, b = 2 * i + 1;
+    int c = 2 * ((i + 1) % n), d = c + 1;
+    if (i == n - 1) std::swap(c, d);  // the half twist
+    const int t0[3] = {a, c, b}, t1[3] = {b, c, d};
+    s.add_face(t0, 3);
+    s.add_face(t1, 3);
+  }
+  std::string msg;
+  EXPECT_EQ(intake_error(s, &msg), ErrorCode::InvalidMesh);
+  EXPECT_NE(msg.find("non-orientable"), std::string::npos) << msg;
+}
+
+TEST(Intake, UnreadableFilesAreNamed) {
+  try {
+    read_mesh_file("/nonexistent/mesh.obj");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::UnreadableFile);
+  }
+  try {
+    read_mesh_file(test::mesh_path("README.md"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::UnreadableFile);
+    EXPECT_NE(std::string(e.what()).find("unsupported extension"), std::string::npos);
+  }
+}
+
+TEST(Intake, MapsFeatureEdgesThroughRepairs) {
+  const IntakeResult r = test::load_mesh("stanford-bunny.obj");  // 1113 unreferenced vertices removed
+  const TriMesh& m = r.mesh;
+  std::vector<std::array<int, 2>> pairs;
+  for (int e = 0; e < 50; ++e) {
+    const int h = m.edge_halfedge[e];
+    pairs.push_back({r.input_vertex[m.from(h)], r.input_vertex[m.to(h)]});
+  }
+  pairs.push_back({0, 1});  // most likely not an edge
+  int unmatched = 0;
+  const auto marked = map_input_edges(r, pairs, &unmatched);
+  for (int e = 0; e < 50; ++e) EXPECT_TRUE(marked[e]);
+  EXPECT_LE(unmatched, 1);
+}
+
+}  // namespace
+}  // namespace qgp

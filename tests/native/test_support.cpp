@@ -1,0 +1,166 @@
+#include "test_support.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+
+#include "core/progress.h"
+#include "intake/read_mesh_file.h"
+
+namespace qgp::test {
+
+std::string mesh_path(const std::string& name) { return std::string(QGP_MESH_DIR) + "/" + name; }
+
+std::vector<std::string> all_mesh_files() {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(QGP_MESH_DIR)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".obj" || ext == ".off" || ext == ".ply") names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::vector<std::string> accepted_mesh_files() {
+  std::vector<std::string> names = all_mesh_files();
+  names.erase(std::remove_if(names.begin(), names.end(),
+                             [](const std::string& n) { return n == "truck.obj" || n == "cycloidal.ply"; }),
+              names.end());
+  return names;
+}
+
+std::vector<std::string> manifold_mesh_files() {
+  return {"armadillo.obj", "beetle.off",    "block.obj",          "bunny.off",
+          "camelhead.off", "decimated-max.obj", "dragon-genus1.obj", "face.obj",
+          "fandisk.obj",   "fertility.off", "igea.ply",           "joint.obj",
+          "joint_rem_p.obj", "kitten.obj",  "mnf07HeadFem_rem_rem_p.obj", "nefertiti.obj",
+          "rocker-arm.obj", "spot.obj",     "stanford-bunny.obj", "torus.obj",
+          "wingnut.obj"};
+}
+
+std::vector<std::string> quick_mesh_files() {
+  return {"spot.obj", "bunny.off", "torus.obj", "fertility.off", "fandisk.obj", "joint.obj",
+          "camelhead.off", "wingnut.obj"};
+}
+
+IntakeResult load_mesh(const std::string& name) {
+  Progress progress;
+  return run_intake(read_mesh_file(mesh_path(name)), IntakeOptions{}, progress);
+}
+
+TriMesh component_mesh(const IntakeResult& intake, int component) {
+  const auto& faces = intake.components.at(component).faces;
+  std::map<int, int> remap;
+  TriMesh m;
+  m.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const int v = intake.mesh.F(faces[i], k);
+      auto it = remap.emplace(v, static_cast<int>(remap.size())).first;
+      m.F(i, k) = it->second;
+    }
+  m.V.resize(static_cast<int>(remap.size()), 3);
+  for (const auto& [old_v, new_v] : remap) m.V.row(new_v) = intake.mesh.V.row(old_v);
+  build_connectivity(m);
+  return m;
+}
+
+void infer_rotations(const TriMesh& mesh, Parametrization& param) {
+  param.rotation.assign(mesh.num_halfedges(), 0);
+  param.is_cut.assign(mesh.num_edges(), 0);
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0) continue;
+    const Vec2 df = param.corner(h / 3, (h % 3 + 1) % 3) - param.corner(h / 3, h % 3);
+    const Vec2 dg = param.corner(o / 3, o % 3) - param.corner(o / 3, (o % 3 + 1) % 3);
+    int found = -1;
+    for (int r = 0; r < 4 && found < 0; ++r)
+      if ((rotate_quarter(df, r) - dg).norm() < 1e-9 * (1 + df.norm())) found = r;
+    if (found < 0) throw std::runtime_error("infer_rotations: edge matches no quarter turn");
+    param.rotation[h] = static_cast<int8_t>(found);
+    const Vec2 pf = param.corner(h / 3, h % 3), pg = param.corner(o / 3, (o % 3 + 1) % 3);
+    if (found != 0 || (pg - pf).norm() > 1e-12) param.is_cut[mesh.edge_of[h]] = 1;
+  }
+}
+
+SyntheticParametrized make_grid_cube(int n) {
+  // Side frames (a, b) with a x b = outward normal.
+  struct Side { Vec3 origin, a, b; };
+  const double N = n;
+  const Side sides[6] = {
+      {{0, 0, N}, Vec3::UnitX(), Vec3::UnitY()},  {{0, 0, 0}, Vec3::UnitY(), Vec3::UnitX()},
+      {{N, 0, 0}, Vec3::UnitY(), Vec3::UnitZ()},  {{0, 0, 0}, Vec3::UnitZ(), Vec3::UnitY()},
+      {{0, N, 0}, Vec3::UnitZ(), Vec3::UnitX()},  {{0, 0, 0}, Vec3::UnitX(), Vec3::UnitZ()}};
+  std::map<std::array<long, 3>, int> vertex_id;
+  std::vector<Vec3> positions;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::array<Vec2, 3>> uvs;
+  auto vid = [&](const Vec3& p) {
+    const std::array<long, 3> key{std::lround(p.x()), std::lround(p.y()), std::lround(p.z())};
+    auto it = vertex_id.emplace(key, static_cast<int>(positions.size())).first;
+    if (it->second == static_cast<int>(positions.size())) positions.push_back(p);
+    return it->second;
+  };
+  for (const Side& s : sides)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const Vec2 q[4] = {{double(i), double(j)}, {double(i + 1), double(j)}, {double(i + 1), double(j + 1)},
+                           {double(i), double(j + 1)}};
+        int id[4];
+        for (int k = 0; k < 4; ++k) id[k] = vid(s.origin + q[k].x() * s.a + q[k].y() * s.b);
+        // Alternate the diagonal so no vertex is special.
+        if ((i + j) % 2 == 0) {
+          tris.push_back({id[0], id[1], id[2]}), uvs.push_back({q[0], q[1], q[2]});
+          tris.push_back({id[0], id[2], id[3]}), uvs.push_back({q[0], q[2], q[3]});
+        } else {
+          tris.push_back({id[0], id[1], id[3]}), uvs.push_back({q[0], q[1], q[3]});
+          tris.push_back({id[1], id[2], id[3]}), uvs.push_back({q[1], q[2], q[3]});
+        }
+      }
+  SyntheticParametrized out;
+  out.mesh.V.resize(static_cast<int>(positions.size()), 3);
+  for (size_t v = 0; v < positions.size(); ++v) out.mesh.V.row(v) = positions[v].transpose();
+  out.mesh.F.resize(static_cast<int>(tris.size()), 3);
+  out.param.uv.resize(3 * static_cast<int>(tris.size()), 2);
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      out.mesh.F(t, k) = tris[t][k];
+      out.param.uv.row(3 * t + k) = uvs[t][k].transpose();
+    }
+  build_connectivity(out.mesh);
+  infer_rotations(out.mesh, out.param);
+  return out;
+}
+
+SyntheticParametrized make_grid_torus(int nu, int nv, double major_radius, double minor_radius) {
+  SyntheticParametrized out;
+  auto id = [&](int i, int j) { return ((i % nu + nu) % nu) * nv + ((j % nv + nv) % nv); };
+  out.mesh.V.resize(nu * nv, 3);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double a = 2 * M_PI * i / nu, b = 2 * M_PI * j / nv;
+      out.mesh.V.row(id(i, j)) << (major_radius + minor_radius * std::cos(b)) * std::cos(a),
+          (major_radius + minor_radius * std::cos(b)) * std::sin(a), minor_radius * std::sin(b);
+    }
+  out.mesh.F.resize(2 * nu * nv, 3);
+  out.param.uv.resize(6 * nu * nv, 2);
+  int t = 0;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int corners[2][3][2] = {{{i, j}, {i + 1, j}, {i + 1, j + 1}}, {{i, j}, {i + 1, j + 1}, {i, j + 1}}};
+      for (const auto& tri : corners) {
+        for (int k = 0; k < 3; ++k) {
+          out.mesh.F(t, k) = id(tri[k][0], tri[k][1]);
+          out.param.uv.row(3 * t + k) << tri[k][0], tri[k][1];
+        }
+        ++t;
+      }
+    }
+  build_connectivity(out.mesh);
+  infer_rotations(out.mesh, out.param);
+  return out;
+}
+
+}  // namespace qgp::test

@@ -1,0 +1,48 @@
+// Shared helpers for the GoogleTest suites: the shared mesh set and small synthetic meshes with
+// known seamless parametrizations.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/parametrization.h"
+#include "intake/intake.h"
+
+namespace qgp::test {
+
+// Path of a file in ../shared/meshes.
+std::string mesh_path(const std::string& name);
+
+// Every mesh file of the shared set (27 files).
+std::vector<std::string> all_mesh_files();
+// The meshes intake accepts (all but the ones with non-manifold edges).
+std::vector<std::string> accepted_mesh_files();
+// The manifold meshes of the shared set's README (one clean component each).
+std::vector<std::string> manifold_mesh_files();
+// A representative subset of manifold meshes that is quick to process (for slower stages).
+std::vector<std::string> quick_mesh_files();
+
+// Reads and repairs a shared mesh (throws on failure).
+IntakeResult load_mesh(const std::string& name);
+
+// A single connected component of an intake result as its own mesh.
+TriMesh component_mesh(const IntakeResult& intake, int component);
+
+// Axis-aligned cube [0,n]^3, each side split into n x n squares of two triangles, with the
+// seamless parametrization whose chart on each side is that side's own coordinates (the eight
+// corners are singularities of index +1).
+struct SyntheticParametrized {
+  TriMesh mesh;
+  Parametrization param;
+};
+SyntheticParametrized make_grid_cube(int n);
+
+// Torus with nu x nv quads (split into triangles), parametrized by (i, j) grid coordinates with
+// translations (nu, 0) and (0, nv) across the two cut loops; no singularities.
+SyntheticParametrized make_grid_torus(int nu, int nv, double major_radius = 3, double minor_radius = 1);
+
+// Fills rotation[] (and is_cut) from per-corner uvs: the quarter turn that maps each edge's
+// vector in one chart to the other. Throws if an edge matches no rotation.
+void infer_rotations(const TriMesh& mesh, Parametrization& param);
+
+}  // namespace qgp::test
