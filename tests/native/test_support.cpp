@@ -50,22 +50,7 @@ IntakeResult load_mesh(const std::string& name) {
   return run_intake(read_mesh_file(mesh_path(name)), IntakeOptions{}, progress);
 }
 
-TriMesh component_mesh(const IntakeResult& intake, int component) {
-  const auto& faces = intake.components.at(component).faces;
-  std::map<int, int> remap;
-  TriMesh m;
-  m.F.resize(static_cast<int>(faces.size()), 3);
-  for (size_t i = 0; i < faces.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      const int v = intake.mesh.F(faces[i], k);
-      auto it = remap.emplace(v, static_cast<int>(remap.size())).first;
-      m.F(i, k) = it->second;
-    }
-  m.V.resize(static_cast<int>(remap.size()), 3);
-  for (const auto& [old_v, new_v] : remap) m.V.row(new_v) = intake.mesh.V.row(old_v);
-  build_connectivity(m);
-  return m;
-}
+TriMesh component_mesh(const IntakeResult& intake, int component) { return extract_component(intake, component); }
 
 void infer_rotations(const TriMesh& mesh, Parametrization& param) {
   param.rotation.assign(mesh.num_halfedges(), 0);

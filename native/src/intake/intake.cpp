@@ -208,4 +208,27 @@ std::vector<char> map_input_edges(const IntakeResult& intake,
   return marked;
 }
 
+TriMesh extract_component(const IntakeResult& intake, int component, std::vector<int>* vertex_map,
+                          std::vector<int>* face_map) {
+  const std::vector<int>& faces = intake.components.at(component).faces;
+  std::vector<int> local(intake.mesh.num_vertices(), -1), to_global;
+  TriMesh m;
+  m.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const int v = intake.mesh.F(faces[i], k);
+      if (local[v] < 0) {
+        local[v] = static_cast<int>(to_global.size());
+        to_global.push_back(v);
+      }
+      m.F(static_cast<int>(i), k) = local[v];
+    }
+  m.V.resize(static_cast<int>(to_global.size()), 3);
+  for (size_t v = 0; v < to_global.size(); ++v) m.V.row(v) = intake.mesh.V.row(to_global[v]);
+  build_connectivity(m);
+  if (vertex_map) *vertex_map = std::move(to_global);
+  if (face_map) *face_map = faces;
+  return m;
+}
+
 }  // namespace qgp

@@ -58,4 +58,9 @@ std::vector<char> map_input_edges(const IntakeResult& intake,
                                   const std::vector<std::array<int, 2>>& input_pairs,
                                   int* unmatched);
 
+// One connected component as its own mesh (connectivity built). vertex_map / face_map (optional)
+// receive, per component vertex / face, the index in intake.mesh.
+TriMesh extract_component(const IntakeResult& intake, int component, std::vector<int>* vertex_map = nullptr,
+                          std::vector<int>* face_map = nullptr);
+
 }  // namespace qgp

@@ -2,6 +2,7 @@
 // the target density re-runs quantization and later stages, nothing before them.
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "core/json.h"
 #include "core/progress.h"
@@ -12,6 +13,14 @@
 namespace qgp {
 
 enum class Job { Intake, Remesh, GridUV };
+
+// One connected component on its way through the pipeline; later stages add their results here.
+struct ComponentState {
+  TriMesh mesh;                     // the component as its own mesh
+  std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
+  std::vector<int> face_map;        // component face -> intake mesh face
+  std::vector<char> feature_edges;  // #E of `mesh`: caller's feature edges
+};
 
 class Session {
  public:
@@ -29,14 +38,20 @@ class Session {
   const Json& report() const { return report_; }
   const IntakeResult* intake() const { return intake_.get(); }
   const PolygonSoup& input() const { return input_; }
+  const std::vector<ComponentState>& components() const { return components_; }
+
+  // Target quad edge length in model units, from the options and the total surface area.
+  double target_edge_length() const;
 
  private:
   void run_intake_stage(Progress& progress);
+  void prepare_components();
   void run_remesh_stages(Job job, Progress& progress);
 
   PolygonSoup input_;
   RemeshOptions options_;
   std::unique_ptr<IntakeResult> intake_;
+  std::vector<ComponentState> components_;
   Json report_;
 };
 
