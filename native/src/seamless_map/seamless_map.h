@@ -12,14 +12,24 @@ namespace qgp {
 
 struct SeamlessMapOptions {
   double edge_length = 1;  // target quad edge length in model units: 1 uv unit = edge_length
+  bool regularity = true;  // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
 };
 
 struct SeamlessMapStats {
-  int flipped_triangles = 0;
-  int degenerate_triangles = 0;
+  int flipped_triangles = 0;           // parametric area < 0 (exact sign)
+  int degenerate_triangles = 0;        // parametric area == 0 (exact sign)
   double max_transition_residual = 0;  // uv units
-  double energy = 0;
+  double energy = 0;                   // field-guided energy (Bommes et al. 2009)
   int ipopt_iterations = 0;
+  // Details:
+  int flipped_before_ipopt = 0, degenerate_before_ipopt = 0;  // equality-only optimum
+  int forced_degenerate = 0;      // made degenerate by the isoline constraints alone (0 expected)
+  int isoline_edges = 0;          // feature + boundary edges constrained to isolines
+  int ipopt_solves = 0;
+  int regions_grown = 0;          // repair rounds beyond the first
+  int max_region_faces = 0;       // most faces constrained in one Ipopt solve
+  double min_area_ratio = 0;      // min parametric / ideal (field-aligned) triangle area
+  double seconds_cholesky = 0, seconds_ipopt = 0;
 };
 
 struct SeamlessMap {
@@ -27,6 +37,12 @@ struct SeamlessMap {
   SeamlessMapStats stats;
 };
 
+// The coordinate (0: u, 1: v) that is constant along the edge of halfedge h when it is an
+// isoline: u for an edge closer to the frame's v direction, v otherwise.
+int isoline_axis(const TriMesh& mesh, const Vec3& frame_u, int h);
+
+// mesh: one component (connectivity built). Feature edges (field.feature_edge) and boundary edges
+// become isolines. Throws Error(Cancelled) on cancel; never fails for flips (they are counted).
 SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
                                  const SeamlessMapOptions& options, Progress& progress);
 

@@ -1,0 +1,917 @@
+#include "seamless_map/parametrization_problem.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "seamless_map/ipopt_qp.h"
+#include "seamless_map/linear_elimination.h"
+#include "seamless_map/orientation.h"
+
+namespace qgp {
+
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Triplet = Eigen::Triplet<double>;
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// (R^r p)[axis] = sign * p[source axis]
+struct RotatedAxis {
+  int axis;
+  double sign;
+};
+RotatedAxis rotated_axis(int r, int axis) {
+  switch (((r % 4) + 4) % 4) {
+    case 0: return {axis, 1};
+    case 1: return axis == 0 ? RotatedAxis{1, -1} : RotatedAxis{0, 1};
+    case 2: return {axis, -1};
+    default: return axis == 0 ? RotatedAxis{1, 1} : RotatedAxis{0, -1};
+  }
+}
+
+enum FaceState : char { kHealthy = 0, kThin = 1, kDegenerate = 2, kFlipped = 3, kForced = 4 };
+enum RepairStrategy { kUnfold = 0, kPropagated = 1, kOwnFit = 2, kAllElastic = 3 };
+
+}  // namespace
+
+// Elimination and energy for one constraint mode.
+struct ParametrizationProblem::System {
+  ConstraintMode mode = ConstraintMode::Hard;
+  double penalty_weight = 0;
+  int num_free = 0;
+  int non_integer_pivots = 0, redundant = 0, inconsistent = 0;
+  // Coordinate (wedge w, axis a) = sum form_coeff * z[form_var] + form_const, row 2w + a.
+  std::vector<int> form_start;
+  std::vector<int> form_var;
+  std::vector<double> form_coeff;
+  std::vector<double> form_const;
+  SpMat Q;            // objective z^T Q z - 2 c^T z + d2 (energy + penalty)
+  Eigen::VectorXd c;
+  double d2 = 0;
+  Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky;
+  bool factorized = false;
+  std::vector<int> var_face_start, var_face;  // free variable -> faces whose corners use it
+  std::vector<char> forced_degenerate;        // #F
+};
+
+ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
+                                               std::vector<char> is_cut, std::vector<Vec3> frame_u,
+                                               double edge_length)
+    : mesh_(mesh), rotation_(std::move(rotation)), is_cut_(std::move(is_cut)), edge_length_(edge_length) {
+  const int nf = mesh.num_faces(), nc = 3 * nf;
+  if (nf == 0 || static_cast<int>(mesh.opposite.size()) != nc)
+    throw Error(ErrorCode::InvalidArgument, "parametrization: the mesh has no faces or no connectivity");
+  if (static_cast<int>(rotation_.size()) != nc || static_cast<int>(frame_u.size()) != nf ||
+      (!is_cut_.empty() && static_cast<int>(is_cut_.size()) != mesh.num_edges()))
+    throw Error(ErrorCode::InvalidArgument, "parametrization: rotation / cut / frame arrays do not match the mesh");
+  if (!(edge_length > 0) || !std::isfinite(edge_length))
+    throw Error(ErrorCode::InvalidArgument, "parametrization: the target edge length must be positive");
+  if (is_cut_.empty()) is_cut_.assign(mesh.num_edges(), 0);
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0) {
+      if (rotation_[h] % 4 != 0) throw Error(ErrorCode::InvalidArgument, "parametrization: rotation on a boundary edge");
+      is_cut_[mesh.edge_of[h]] = 0;
+      continue;
+    }
+    if (((rotation_[h] + rotation_[o]) % 4 + 4) % 4 != 0)
+      throw Error(ErrorCode::InvalidArgument, "parametrization: rotations of opposite halfedges are not inverse");
+    if (rotation_[h] % 4 != 0) is_cut_[mesh.edge_of[h]] = 1;
+  }
+
+  // Wedges: corners joined across non-cut interior edges.
+  std::vector<int> parent(nc);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0 || o < h) continue;
+    if (is_cut_[mesh.edge_of[h]]) {
+      cut_halfedges_.push_back(h);
+      continue;
+    }
+    parent[find(h)] = find(3 * (o / 3) + (o % 3 + 1) % 3);
+    parent[find(TriMesh::next(h))] = find(o);
+  }
+  wedge_of_.assign(nc, -1);
+  std::vector<int> root_wedge(nc, -1);
+  for (int c = 0; c < nc; ++c) {
+    const int r = find(c);
+    if (root_wedge[r] < 0) root_wedge[r] = num_wedges_++;
+    wedge_of_[c] = root_wedge[r];
+  }
+
+  // Ideal shapes in each face's frame (uv units) and the gradient operators.
+  ideal_.resize(nc);
+  ideal_area_.resize(nf);
+  gradient_.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 p0 = mesh.position(mesh.F(f, 0)), p1 = mesh.position(mesh.F(f, 1)), p2 = mesh.position(mesh.F(f, 2));
+    const Vec3 n = (p1 - p0).cross(p2 - p0);
+    Vec2 q[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()};
+    bool ok = false;
+    if (n.norm() > 0 && std::isfinite(n.norm())) {
+      const Vec3 nn = n.normalized();
+      Vec3 fu = frame_u[f] - frame_u[f].dot(nn) * nn;
+      if (fu.norm() > 0 && std::isfinite(fu.norm())) {
+        fu.normalize();
+        const Vec3 fv = nn.cross(fu);
+        q[1] = Vec2((p1 - p0).dot(fu), (p1 - p0).dot(fv)) / edge_length;
+        q[2] = Vec2((p2 - p0).dot(fu), (p2 - p0).dot(fv)) / edge_length;
+        ok = cross2(q[1], q[2]) > 0;
+      }
+    }
+    if (!ok) {
+      // Degenerate face or frame: an equilateral stand-in of the same mean edge length.
+      const double len = ((p1 - p0).norm() + (p2 - p1).norm() + (p0 - p2).norm()) / 3 / edge_length;
+      if (!(len > 0) || !std::isfinite(len))
+        throw Error(ErrorCode::InvalidMesh, "parametrization: face " + std::to_string(f) + " has no extent");
+      q[1] = Vec2(len, 0);
+      q[2] = Vec2(0.5 * len, 0.5 * std::sqrt(3.0) * len);
+    }
+    const double area2 = cross2(q[1] - q[0], q[2] - q[0]);
+    for (int k = 0; k < 3; ++k) {
+      ideal_[3 * f + k] = q[k];
+      // grad phi_k = perp(q_{k+2} - q_{k+1}) / (2 A), perp(x, y) = (-y, x).
+      const Vec2 d = q[(k + 2) % 3] - q[(k + 1) % 3];
+      gradient_[f][k] = -d.y() / area2;
+      gradient_[f][3 + k] = d.x() / area2;
+    }
+    ideal_area_[f] = 0.5 * area2;
+  }
+}
+
+ParametrizationProblem::~ParametrizationProblem() = default;
+
+void ParametrizationProblem::add_isoline(int halfedge, int axis) {
+  if (halfedge < 0 || halfedge >= mesh_.num_halfedges() || (axis != 0 && axis != 1))
+    throw Error(ErrorCode::InvalidArgument, "parametrization: bad isoline");
+  isolines_.push_back({halfedge, axis});
+  system_.reset();
+}
+
+void ParametrizationProblem::add_linear_constraint(std::vector<CornerTerm> terms, double rhs) {
+  for (const CornerTerm& t : terms)
+    if (t.corner < 0 || t.corner >= mesh_.num_halfedges() || (t.axis != 0 && t.axis != 1) || !std::isfinite(t.coeff))
+      throw Error(ErrorCode::InvalidArgument, "parametrization: bad linear constraint term");
+  if (!std::isfinite(rhs)) throw Error(ErrorCode::InvalidArgument, "parametrization: non-finite constraint value");
+  constraints_.push_back({std::move(terms), rhs});
+  system_.reset();
+}
+
+void ParametrizationProblem::clear_linear_constraints() {
+  constraints_.clear();
+  system_.reset();
+}
+
+void ParametrizationProblem::set_pin_translation(bool pin) {
+  if (pin != pin_) system_.reset();
+  pin_ = pin;
+}
+
+ParametrizationProblem::System& ParametrizationProblem::system(ConstraintMode mode, double penalty_weight,
+                                                               Progress& progress) {
+  const bool with_penalty = mode == ConstraintMode::Penalty && !constraints_.empty();
+  if (system_ && system_->mode == mode && (!with_penalty || system_->penalty_weight == penalty_weight)) return *system_;
+  system_.reset();
+  auto sys = std::make_unique<System>();
+  sys->mode = mode;
+  sys->penalty_weight = penalty_weight;
+  const int nf = mesh_.num_faces(), nw = num_wedges_;
+  const int num_vars = 2 * nw + 2 * static_cast<int>(cut_halfedges_.size());
+  auto wedge_var = [&](int corner, int axis) { return 2 * wedge_of_[corner] + axis; };
+
+  // Exact elimination of the hard constraints. Wedges are preferred as pivots, so that the
+  // second side of a cut arc becomes R * first side + the arc's translation.
+  LinearElimination elim(num_vars);
+  for (int v = 0; v < 2 * nw; ++v) elim.set_priority(v, 1);
+  if (pin_) {
+    for (int a = 0; a < 2; ++a) {
+      elim.set_priority(wedge_var(0, a), 2);
+      elim.add_equation({{wedge_var(0, a), 1.0}}, 0.0);
+    }
+  }
+  for (size_t k = 0; k < cut_halfedges_.size(); ++k) {
+    const int h = cut_halfedges_[k], o = mesh_.opposite[h];
+    const int ends[2][2] = {{h, TriMesh::next(o)}, {TriMesh::next(h), o}};  // (corner in f, corner in g)
+    for (const auto& end : ends)
+      for (int a = 0; a < 2; ++a) {
+        const RotatedAxis ra = rotated_axis(rotation_[h], a);
+        elim.add_equation({{wedge_var(end[1], a), 1.0},
+                           {wedge_var(end[0], ra.axis), -ra.sign},
+                           {2 * nw + 2 * static_cast<int>(k) + a, -1.0}},
+                          0.0);
+      }
+  }
+  for (const auto& [h, axis] : isolines_)
+    elim.add_equation({{wedge_var(h, axis), 1.0}, {wedge_var(TriMesh::next(h), axis), -1.0}}, 0.0);
+  if (mode == ConstraintMode::Hard)
+    for (const LinearConstraint& lc : constraints_) {
+      LinearForm form;
+      for (const CornerTerm& t : lc.terms) form.push_back({wedge_var(t.corner, t.axis), t.coeff});
+      elim.add_equation(std::move(form), lc.rhs);
+    }
+  progress.check_cancel();
+  sys->non_integer_pivots = elim.non_integer_pivots();
+  sys->redundant = elim.redundant_equations();
+  sys->inconsistent = elim.inconsistent_equations();
+  const std::vector<int> free_index = elim.free_index();
+  sys->num_free = static_cast<int>(elim.free_variables().size());
+  sys->form_start.assign(2 * nw + 1, 0);
+  sys->form_const.assign(2 * nw, 0.0);
+  for (int v = 0; v < 2 * nw; ++v) {
+    double constant = 0;
+    const LinearForm form = elim.expansion(v, &constant);
+    for (const LinearTerm& t : form) {
+      sys->form_var.push_back(free_index[t.var]);
+      sys->form_coeff.push_back(t.coeff);
+    }
+    sys->form_const[v] = constant;
+    sys->form_start[v + 1] = static_cast<int>(sys->form_var.size());
+  }
+  progress.check_cancel();
+
+  // Faces whose three corners share a coordinate by the hard constraints alone.
+  auto same_form = [&](int va, int vb) {
+    if (sys->form_const[va] != sys->form_const[vb]) return false;
+    const int la = sys->form_start[va + 1] - sys->form_start[va], lb = sys->form_start[vb + 1] - sys->form_start[vb];
+    if (la != lb) return false;
+    for (int i = 0; i < la; ++i)
+      if (sys->form_var[sys->form_start[va] + i] != sys->form_var[sys->form_start[vb] + i] ||
+          sys->form_coeff[sys->form_start[va] + i] != sys->form_coeff[sys->form_start[vb] + i])
+        return false;
+    return true;
+  };
+  sys->forced_degenerate.assign(nf, 0);
+  for (int f = 0; f < nf; ++f) {
+    for (int a = 0; a < 2; ++a)
+      if (same_form(wedge_var(3 * f, a), wedge_var(3 * f + 1, a)) && same_form(wedge_var(3 * f, a), wedge_var(3 * f + 2, a)))
+        sys->forced_degenerate[f] = 1;
+    for (int k = 0; k < 3; ++k) {
+      const int c0 = 3 * f + k, c1 = 3 * f + (k + 1) % 3;
+      if (same_form(wedge_var(c0, 0), wedge_var(c1, 0)) && same_form(wedge_var(c0, 1), wedge_var(c1, 1)))
+        sys->forced_degenerate[f] = 1;
+    }
+  }
+
+  // Least-squares rows: per face and axis the two gradient components, weighted by sqrt(area).
+  std::vector<Triplet> triplets;
+  std::vector<double> rhs;
+  triplets.reserve(static_cast<size_t>(nf) * 16);
+  rhs.reserve(static_cast<size_t>(4) * nf);
+  int row = 0;
+  for (int f = 0; f < nf; ++f) {
+    const double w = std::sqrt(ideal_area_[f]);
+    for (int a = 0; a < 2; ++a)
+      for (int j = 0; j < 2; ++j, ++row) {
+        double b = (a == j) ? w : 0.0;  // target gradient: (1,0) for u, (0,1) for v
+        for (int k = 0; k < 3; ++k) {
+          const double g = w * gradient_[f][3 * j + k];
+          const int v = wedge_var(3 * f + k, a);
+          for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
+            triplets.emplace_back(row, sys->form_var[i], g * sys->form_coeff[i]);
+          b -= g * sys->form_const[v];
+        }
+        rhs.push_back(b);
+      }
+    if ((f & 0xffff) == 0) progress.check_cancel();
+  }
+  if (with_penalty) {
+    const double w = std::sqrt(penalty_weight);
+    for (const LinearConstraint& lc : constraints_) {
+      double b = w * lc.rhs;
+      for (const CornerTerm& t : lc.terms) {
+        const int v = wedge_var(t.corner, t.axis);
+        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
+          triplets.emplace_back(row, sys->form_var[i], w * t.coeff * sys->form_coeff[i]);
+        b -= w * t.coeff * sys->form_const[v];
+      }
+      rhs.push_back(b);
+      ++row;
+    }
+  }
+  SpMat M(row, sys->num_free);
+  M.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  const Eigen::Map<const Eigen::VectorXd> d(rhs.data(), row);
+  sys->Q = SpMat(M.transpose() * M);
+  sys->c = M.transpose() * d;
+  sys->d2 = d.squaredNorm();
+  progress.check_cancel();
+
+  // Free variable -> faces.
+  std::vector<std::pair<int, int>> pairs;  // (var, face)
+  for (int f = 0; f < nf; ++f) {
+    const size_t first = pairs.size();
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 2; ++a) {
+        const int v = wedge_var(3 * f + k, a);
+        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i) pairs.push_back({sys->form_var[i], f});
+      }
+    std::sort(pairs.begin() + static_cast<long>(first), pairs.end());
+    pairs.erase(std::unique(pairs.begin() + static_cast<long>(first), pairs.end()), pairs.end());
+  }
+  std::sort(pairs.begin(), pairs.end());
+  sys->var_face_start.assign(sys->num_free + 1, 0);
+  for (const auto& p : pairs) ++sys->var_face_start[p.first + 1];
+  for (int v = 0; v < sys->num_free; ++v) sys->var_face_start[v + 1] += sys->var_face_start[v];
+  sys->var_face.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) sys->var_face[i] = pairs[i].second;
+
+  system_ = std::move(sys);
+  return *system_;
+}
+
+namespace {
+
+// Evaluation helpers bound to one system.
+struct Evaluator {
+  const TriMesh& mesh;
+  const std::vector<int>& wedge_of;
+  const std::vector<int>& form_start;
+  const std::vector<int>& form_var;
+  const std::vector<double>& form_coeff;
+  const std::vector<double>& form_const;
+
+  int var(int corner, int axis) const { return 2 * wedge_of[corner] + axis; }
+  double coordinate(const Eigen::VectorXd& z, int corner, int axis) const {
+    const int v = var(corner, axis);
+    double s = form_const[v];
+    for (int i = form_start[v]; i < form_start[v + 1]; ++i) s += form_coeff[i] * z[form_var[i]];
+    return s;
+  }
+  Vec2 corner(const Eigen::VectorXd& z, int c) const { return Vec2(coordinate(z, c, 0), coordinate(z, c, 1)); }
+};
+
+}  // namespace
+
+double ParametrizationProblem::field_energy(const Parametrization& param) const {
+  double e = 0;
+  for (int f = 0; f < mesh_.num_faces(); ++f) {
+    const auto& g = gradient_[f];
+    for (int a = 0; a < 2; ++a)
+      for (int j = 0; j < 2; ++j) {
+        double s = (a == j) ? -1.0 : 0.0;
+        for (int k = 0; k < 3; ++k) s += g[3 * j + k] * param.uv(3 * f + k, a);
+        e += ideal_area_[f] * s * s;
+      }
+  }
+  return e;
+}
+
+double ParametrizationProblem::constraint_violation(const Parametrization& param) const {
+  double worst = 0;
+  for (const LinearConstraint& lc : constraints_) {
+    double s = -lc.rhs;
+    for (const CornerTerm& t : lc.terms) s += t.coeff * param.uv(t.corner, t.axis);
+    worst = std::max(worst, std::abs(s));
+  }
+  return worst;
+}
+
+ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolveOptions& options, Progress& progress) {
+  const int nf = mesh_.num_faces(), nc = 3 * nf;
+  if (options.reference && (options.reference->uv.rows() != nc))
+    throw Error(ErrorCode::InvalidArgument, "parametrization: the reference pose does not match the mesh");
+  auto report = [&](double t) {
+    progress.update(options.progress_begin + t * (options.progress_end - options.progress_begin));
+  };
+  ParametrizationSolution out;
+  ParametrizationSolveStats& st = out.stats;
+
+  Timer timer;
+  System& sys = system(options.linear_constraints, options.penalty_weight, progress);
+  st.seconds_assembly = timer.seconds();
+  st.free_variables = sys.num_free;
+  st.non_integer_pivots = sys.non_integer_pivots;
+  st.redundant_constraints = sys.redundant;
+  st.inconsistent_constraints = sys.inconsistent;
+  report(0.15);
+
+  // Equality-only optimum.
+  timer = Timer();
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(sys.num_free);
+  if (sys.num_free > 0) {
+    if (!sys.factorized) {
+      sys.cholesky.compute(sys.Q);
+      if (sys.cholesky.info() != Eigen::Success)
+        throw Error(ErrorCode::StageFailed,
+                    "parametrization: the energy is not positive definite (a part of the mesh is unconstrained)");
+      sys.factorized = true;
+    }
+    z = sys.cholesky.solve(sys.c);
+    if (sys.cholesky.info() != Eigen::Success || !z.allFinite())
+      throw Error(ErrorCode::StageFailed, "parametrization: the sparse Cholesky solve failed");
+  }
+  st.seconds_cholesky = timer.seconds();
+  report(0.3);
+
+  const Evaluator ev{mesh_, wedge_of_, sys.form_start, sys.form_var, sys.form_coeff, sys.form_const};
+  auto objective = [&](const Eigen::VectorXd& x) { return x.dot(sys.Q * x) - 2 * sys.c.dot(x) + sys.d2; };
+  auto classify_face = [&](const Eigen::VectorXd& x, int f, double* ratio) -> FaceState {
+    const Vec2 a = ev.corner(x, 3 * f), b = ev.corner(x, 3 * f + 1), c = ev.corner(x, 3 * f + 2);
+    const double area = 0.5 * cross2(b - a, c - a);
+    if (ratio) *ratio = area / ideal_area_[f];
+    if (sys.forced_degenerate[f]) return kForced;
+    const int s = orient2d_sign(a, b, c);
+    if (s < 0) return kFlipped;
+    if (s == 0) return kDegenerate;
+    return area < options.min_area_ratio * ideal_area_[f] ? kThin : kHealthy;
+  };
+  struct Census {
+    std::vector<char> state;
+    int flipped = 0, degenerate = 0, thin = 0, forced = 0;
+    double min_ratio = 0;
+    double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
+    int bad() const { return flipped + degenerate + thin; }
+  };
+  auto census = [&](const Eigen::VectorXd& x) {
+    Census cs;
+    cs.state.resize(nf);
+    cs.min_ratio = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < nf; ++f) {
+      double ratio = 0;
+      cs.state[f] = classify_face(x, f, &ratio);
+      cs.min_ratio = std::min(cs.min_ratio, ratio);
+      cs.flipped += cs.state[f] == kFlipped;
+      cs.degenerate += cs.state[f] == kDegenerate || cs.state[f] == kForced;
+      cs.forced += cs.state[f] == kForced;
+      cs.thin += cs.state[f] == kThin;
+      if (cs.state[f] != kHealthy && cs.state[f] != kForced) cs.depth += std::max(0.0, options.min_area_ratio - ratio);
+    }
+    return cs;
+  };
+
+  Census current = census(z);
+  {
+    Parametrization initial;
+    initial.uv.resize(nc, 2);
+    for (int c = 0; c < nc; ++c) initial.uv.row(c) = ev.corner(z, c).transpose();
+    st.energy_initial = field_energy(initial);
+  }
+  st.flipped_initial = current.flipped;
+  st.degenerate_initial = current.degenerate;
+  st.thin_initial = current.thin;
+  st.forced_degenerate = current.forced;
+
+  // Vertex -> faces for region growth.
+  std::vector<int> vf_start(mesh_.num_vertices() + 1, 0), vf;
+  for (int c = 0; c < nc; ++c) ++vf_start[mesh_.F(c / 3, c % 3) + 1];
+  for (int v = 0; v < mesh_.num_vertices(); ++v) vf_start[v + 1] += vf_start[v];
+  vf.resize(nc);
+  {
+    std::vector<int> fill(vf_start.begin(), vf_start.end() - 1);
+    for (int c = 0; c < nc; ++c) vf[fill[mesh_.F(c / 3, c % 3)]++] = c / 3;
+  }
+  auto dilate = [&](std::vector<char>& in_region, int rings) {
+    std::vector<int> frontier;
+    for (int f = 0; f < nf; ++f)
+      if (in_region[f]) frontier.push_back(f);
+    for (int r = 0; r < rings && !frontier.empty(); ++r) {
+      std::vector<int> next;
+      for (int f : frontier)
+        for (int k = 0; k < 3; ++k) {
+          const int v = mesh_.F(f, k);
+          for (int i = vf_start[v]; i < vf_start[v + 1]; ++i)
+            if (!in_region[vf[i]]) in_region[vf[i]] = 1, next.push_back(vf[i]);
+        }
+      frontier.swap(next);
+    }
+  };
+
+  // Faces with isoline edges: the rotation (relative to the field) that puts the ideal isoline
+  // edges exactly on their axes (unit vector; zero for other faces).
+  std::vector<Vec2> pinned_rotation(nf, Vec2::Zero());
+  std::vector<char> iso_halfedge(nc, 0);
+  for (const auto& [h, axis] : isolines_) {
+    for (int side : {h, mesh_.opposite[h]}) {
+      if (side < 0) continue;
+      iso_halfedge[side] = 1;
+      const int f = side / 3;
+      const int a = side == h ? axis : (axis + rotation_[h]) % 2;
+      const Vec2 d = ideal_[TriMesh::next(side)] - ideal_[side];
+      const double angle = std::atan2(d.y(), d.x());
+      const double base = a == 0 ? M_PI / 2 : 0.0;  // u constant: the edge runs along v
+      const double turn = std::remainder(base - angle, M_PI);  // nearest of base, base + pi
+      pinned_rotation[f] += Vec2(std::cos(turn), std::sin(turn));
+    }
+  }
+  for (Vec2& r : pinned_rotation)
+    if (r.squaredNorm() > 0) r.normalize();
+
+  // One Ipopt solve over the variables of the region's corners; every face those variables reach
+  // gets tri-sector constraints linearized around its reference triangle.
+  auto solve_region = [&](const std::vector<char>& in_region, const std::vector<char>& active,
+                          const Eigen::VectorXd& x, const Census& cs, int strategy, double pb, double pe,
+                          QPResult::Status* status) -> Eigen::VectorXd {
+    // Reference triangles of bad faces (strategy): kUnfold: the current triangle with one
+    // vertex moved across its opposite edge (the smallest change; keeps isoline edges);
+    // kPropagated: the ideal shape rotated like the healthy neighbourhood; kOwnFit: the ideal
+    // shape rotated to fit the current one; kAllElastic: as kPropagated, and healthy faces may
+    // leave their sectors too (at a cost).
+    const bool follow_neighbours = strategy == kPropagated || strategy == kAllElastic;
+    // Variables used only by region faces move; the active faces they reach are constrained.
+    std::vector<int> local(sys.num_free, -1), vars;
+    for (int v = 0; v < sys.num_free; ++v) {
+      bool inside = sys.var_face_start[v] < sys.var_face_start[v + 1];
+      for (int i = sys.var_face_start[v]; i < sys.var_face_start[v + 1] && inside; ++i) inside = in_region[sys.var_face[i]];
+      if (inside) local[v] = static_cast<int>(vars.size()), vars.push_back(v);
+    }
+    std::vector<char> constrained(nf, 0);
+    std::vector<int> faces;
+    for (int v : vars)
+      for (int i = sys.var_face_start[v]; i < sys.var_face_start[v + 1]; ++i) {
+        const int f = sys.var_face[i];
+        if (active[f] && !constrained[f] && !sys.forced_degenerate[f]) constrained[f] = 1, faces.push_back(f);
+      }
+    const int n = static_cast<int>(vars.size());
+    st.max_region_faces = std::max(st.max_region_faces, static_cast<int>(faces.size()));
+    st.max_qp_variables = std::max(st.max_qp_variables, n);
+
+    // Faces without a valid reference use their ideal (isometric, field-aligned) shape rotated by
+    // the best-fit rotation of ideal onto current shape: their own, or (follow_neighbours) one
+    // propagated inward from the healthy faces around each bad cluster, so that adjacent bad
+    // faces agree. A rotation relative to the field is the same in every chart (rotations commute
+    // with the transitions), so it is carried across cuts unchanged.
+    auto best_fit = [&](int g) {
+      double re = 0, im = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Vec2 a = ideal_[3 * g + (k + 1) % 3] - ideal_[3 * g + k];
+        const Vec2 b = ev.corner(x, 3 * g + (k + 1) % 3) - ev.corner(x, 3 * g + k);
+        re += a.dot(b);
+        im += cross2(a, b);
+      }
+      const double len = std::hypot(re, im);
+      return len > 0 ? Vec2(re / len, im / len) : Vec2(1, 0);
+    };
+    std::vector<Vec2> ref_rotation(nf, Vec2(1, 0));
+    {
+      std::vector<char> assigned(nf, 0);
+      std::vector<int> layer;
+      for (int f : faces)
+        if (cs.state[f] != kHealthy) {
+          // An isoline edge fixes the rotation: its direction is exactly an axis.
+          if (pinned_rotation[f].squaredNorm() > 0) {
+            ref_rotation[f] = pinned_rotation[f];
+            assigned[f] = 1;
+          } else {
+            ref_rotation[f] = best_fit(f);
+          }
+          if (!follow_neighbours) continue;
+          if (assigned[f]) layer.push_back(f);
+          for (int k = 0; k < 3; ++k) {
+            const int o = mesh_.opposite[3 * f + k];
+            if (o >= 0 && cs.state[o / 3] == kHealthy && !assigned[o / 3]) {
+              assigned[o / 3] = 1;
+              ref_rotation[o / 3] = best_fit(o / 3);
+              layer.push_back(o / 3);
+            }
+          }
+        }
+      while (!layer.empty()) {
+        std::vector<int> next;
+        for (int g : layer)
+          for (int k = 0; k < 3; ++k) {
+            const int o = mesh_.opposite[3 * g + k];
+            if (o < 0 || assigned[o / 3] || cs.state[o / 3] == kHealthy || cs.state[o / 3] == kForced) continue;
+            const int f = o / 3;
+            Vec2 sum = Vec2::Zero();
+            for (int j = 0; j < 3; ++j) {
+              const int p = mesh_.opposite[3 * f + j];
+              if (p >= 0 && assigned[p / 3]) sum += ref_rotation[p / 3];
+            }
+            if (sum.norm() > 0) ref_rotation[f] = sum.normalized();
+            assigned[f] = 1;
+            next.push_back(f);
+          }
+        layer.swap(next);
+      }
+    }
+
+    SparseQP qp;
+    std::vector<Triplet> ht;
+    qp.linear.resize(n);
+    for (int j = 0; j < n; ++j) {
+      double fixed = 0;
+      for (SpMat::InnerIterator it(sys.Q, vars[j]); it; ++it) {
+        const int l = local[it.row()];
+        if (l >= 0) ht.emplace_back(l, j, 2 * it.value());
+        else fixed += it.value() * x[it.row()];
+      }
+      qp.linear[j] = 2 * (fixed - sys.c[vars[j]]);
+    }
+    qp.hessian.resize(n, n);
+    qp.hessian.setFromTriplets(ht.begin(), ht.end());
+    qp.start.resize(n);
+    for (int j = 0; j < n; ++j) qp.start[j] = x[vars[j]];
+
+    std::vector<Triplet> ct;
+    std::vector<double> lower;
+    std::vector<std::pair<int, double>> elastic;  // (row, cost per unit of violation)
+    int row = 0;
+    for (int f : faces) {
+      // Reference triangle: current pose if healthy, else the caller's pose if healthy there,
+      // else the ideal field-aligned shape.
+      Vec2 r[3];
+      bool have = false;
+      if (cs.state[f] == kHealthy) {
+        for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
+        have = true;
+      }
+      if (!have && options.reference) {
+        for (int k = 0; k < 3; ++k) r[k] = options.reference->corner(f, k);
+        const double area = 0.5 * cross2(r[1] - r[0], r[2] - r[0]);
+        have = orient2d_sign(r[0], r[1], r[2]) > 0 && area >= options.min_area_ratio * ideal_area_[f];
+      }
+      if (!have && strategy == kUnfold) {
+        // Move the vertex whose adjacent edges are no isolines and which is closest to the line
+        // of its opposite edge, to the positive side with a modest area.
+        for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
+        int best = -1;
+        double best_height = 0;
+        for (int k = 0; k < 3; ++k) {
+          if (iso_halfedge[3 * f + k] || iso_halfedge[3 * f + (k + 2) % 3]) continue;
+          const Vec2 d = r[(k + 2) % 3] - r[(k + 1) % 3];
+          if (!(d.norm() > 0)) continue;
+          const double height = std::abs(cross2(d, r[k] - r[(k + 1) % 3])) / d.norm();
+          if (best < 0 || height < best_height) best = k, best_height = height;
+        }
+        if (best >= 0) {
+          const Vec2 a = r[(best + 1) % 3], d = r[(best + 2) % 3] - a;
+          const double len = d.norm();
+          const Vec2 dir = d / len, left(-dir.y(), dir.x());
+          const double area = std::max(std::abs(0.5 * cross2(r[1] - r[0], r[2] - r[0])), 0.05 * ideal_area_[f]);
+          r[best] = a + (r[best] - a).dot(dir) * dir + (2 * area / len) * left;
+          have = orient2d_sign(r[0], r[1], r[2]) > 0;
+        }
+      }
+      if (!have) {
+        const Vec2 turn = ref_rotation[f];
+        const double re = turn.x(), im = turn.y();
+        const double angle = (re == 0 && im == 0) ? 0.0 : std::atan2(im, re);
+        const double cs = std::cos(angle), sn = std::sin(angle);
+        for (int k = 0; k < 3; ++k) {
+          const Vec2 q = ideal_[3 * f + k];
+          r[k] = Vec2(cs * q.x() - sn * q.y(), sn * q.x() + cs * q.y());
+        }
+      }
+      const double ideal_len =
+          ((ideal_[3 * f + 1] - ideal_[3 * f]).norm() + (ideal_[3 * f + 2] - ideal_[3 * f + 1]).norm() +
+           (ideal_[3 * f] - ideal_[3 * f + 2]).norm()) / 3;
+      Vec2 dir[3], bound[3];
+      for (int k = 0; k < 3; ++k) dir[k] = (r[(k + 1) % 3] - r[k]).normalized();
+      for (int k = 0; k < 3; ++k) {  // bisector between edge k-1 and edge k
+        const Vec2& a = dir[(k + 2) % 3];
+        const double turn = std::atan2(cross2(a, dir[k]), a.dot(dir[k]));  // in (0, pi)
+        const double half = 0.5 * turn;
+        bound[k] = Vec2(a.x() * std::cos(half) - a.y() * std::sin(half), a.x() * std::sin(half) + a.y() * std::cos(half));
+      }
+      for (int k = 0; k < 3; ++k) {
+        const Vec2 e = r[(k + 1) % 3] - r[k];
+        // cross(bound_k, e) >= m and cross(e, bound_{k+1}) >= m; in terms of e: n . e >= m.
+        const Vec2 normals[2] = {Vec2(-bound[k].y(), bound[k].x()),
+                                 Vec2(bound[(k + 1) % 3].y(), -bound[(k + 1) % 3].x())};
+        for (const Vec2& nrm : normals) {
+          const double ref_value = nrm.dot(e);
+          const double margin = std::min(options.margin * ideal_len, 0.5 * std::max(ref_value, 0.0));
+          double bound_value = margin;
+          const int ca = 3 * f + (k + 1) % 3, cb = 3 * f + k;  // e = p(ca) - p(cb)
+          for (int a = 0; a < 2; ++a)
+            for (int side = 0; side < 2; ++side) {
+              const int v = ev.var(side == 0 ? ca : cb, a);
+              const double s = (side == 0 ? 1.0 : -1.0) * nrm[a];
+              bound_value -= s * sys.form_const[v];
+              for (int i = sys.form_start[v]; i < sys.form_start[v + 1]; ++i) {
+                const int gv = sys.form_var[i];
+                if (local[gv] >= 0) ct.emplace_back(row, local[gv], s * sys.form_coeff[i]);
+                else bound_value -= s * sys.form_coeff[i] * x[gv];
+              }
+            }
+          lower.push_back(bound_value);
+          // Faces without a valid reference of their own may violate their sectors at a
+          // (large) cost, so that the problem stays feasible; re-linearization continues.
+          if (cs.state[f] != kHealthy || strategy == kAllElastic) elastic.push_back({row, options.elastic_weight * ideal_len});
+          ++row;
+        }
+      }
+    }
+    const int ns = static_cast<int>(elastic.size());
+    if (ns > 0) {
+      // Slack s >= 0 per elastic row: a.x + s >= lower, cost weight * s.
+      qp.hessian.conservativeResize(n + ns, n + ns);
+      qp.linear.conservativeResize(n + ns);
+      qp.start.conservativeResize(n + ns);
+      qp.variable_lower = Eigen::VectorXd::Constant(n + ns, -2e19);
+      for (int j = 0; j < ns; ++j) {
+        ct.emplace_back(elastic[j].first, n + j, 1.0);
+        qp.linear[n + j] = elastic[j].second;
+        qp.variable_lower[n + j] = 0;
+      }
+    }
+    qp.constraints.resize(row, n + ns);
+    qp.constraints.setFromTriplets(ct.begin(), ct.end());
+    qp.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), row);
+    if (ns > 0) {
+      const Eigen::VectorXd value = qp.constraints.leftCols(n) * qp.start.head(n);
+      for (int j = 0; j < ns; ++j) {
+        const int r = elastic[j].first;
+        qp.start[n + j] = std::max(0.0, qp.lower[r] - value[r]);
+      }
+    }
+
+    QPOptions qo;
+    qo.max_iterations = options.max_ipopt_iterations;
+    qo.tolerance = options.ipopt_tolerance;
+    qo.progress_begin = pb;
+    qo.progress_end = pe;
+    Timer t;
+    const QPResult res = solve_qp(qp, qo, progress);
+    st.seconds_ipopt += t.seconds();
+    ++st.ipopt_solves;
+    st.ipopt_iterations += res.iterations;
+    *status = res.status;
+    Eigen::VectorXd y = x;
+    if (res.status != QPResult::Status::Failed && res.x.size() == n + ns && res.x.allFinite())
+      for (int j = 0; j < n; ++j) y[vars[j]] = res.x[j];
+    return y;
+  };
+
+  const double pb = options.progress_begin, span = options.progress_end - options.progress_begin;
+  // Active set: the variables of a region around the bad faces move; the bad faces and one ring
+  // around them are constrained. Faces that turn bad outside the constrained set join it.
+  auto is_bad = [](char state) { return state != kHealthy && state != kForced; };
+  std::vector<char> region(nf, 0), active(nf, 0);
+  auto add_bad = [&](const Census& cs, std::vector<char>& set, int rings, const std::vector<char>* only_outside) {
+    std::vector<char> seed(nf, 0);
+    for (int f = 0; f < nf; ++f) seed[f] = is_bad(cs.state[f]) && (!only_outside || !(*only_outside)[f]);
+    dilate(seed, rings);
+    for (int f = 0; f < nf; ++f) set[f] = set[f] || seed[f];
+  };
+  const bool repair = options.regularity != RegularityMode::Off &&
+                      (options.regularity == RegularityMode::AllFaces || current.bad() > 0);
+  if (repair) {
+    int rings = std::max(0, options.ring_size);
+    const int rounds = std::max(1, options.max_repair_rounds);
+    if (options.regularity == RegularityMode::AllFaces) {
+      region.assign(nf, 1);
+      active.assign(nf, 1);
+    } else {
+      add_bad(current, region, rings, nullptr);
+      add_bad(current, active, 1, nullptr);
+    }
+    std::vector<char> touched(nf, 0);  // faces that were bad at some point
+    for (int f = 0; f < nf; ++f) touched[f] = is_bad(current.state[f]);
+    int rejected = 0;
+    for (int round = 0; round < rounds; ++round) {
+      ++st.repair_rounds;
+      QPResult::Status status;
+      const double t0 = 0.3 + 0.5 * round / rounds;
+      // The strategies take turns (a rejected round leaves the pose unchanged).
+      const int strategy = round % 4;
+      const Eigen::VectorXd y = solve_region(region, active, z, current, strategy, pb + span * t0,
+                                             pb + span * (t0 + 0.5 / rounds), &status);
+      Census next = census(y);
+      bool escaped = false;
+      for (int f = 0; f < nf && !escaped; ++f) escaped = is_bad(next.state[f]) && !active[f];
+      if (escaped) {
+        // Unconstrained faces went bad: they are constrained from now on. The new pose is kept
+        // only if it is better anyway (then the region moves to what is still bad).
+        for (int f = 0; f < nf; ++f) touched[f] = touched[f] || (is_bad(next.state[f]) && !active[f]);
+        add_bad(next, active, 1, &active);
+        if (!(next.bad() < current.bad() && next.depth < current.depth)) {
+          add_bad(next, region, rings, nullptr);
+          continue;
+        }
+      }
+      // Keep the new pose when it has fewer bad faces or they are less bad; grow the region.
+      if (next.bad() < current.bad() || next.depth < current.depth) {
+        z = y;
+        current = std::move(next);
+        rejected = 0;
+      } else if (++rejected >= 4) {
+        break;  // no strategy makes progress: a fixed point
+      }
+      if (current.bad() == 0) break;
+      // Next region: wider rings around what is still bad (faces fixed earlier stay constrained).
+      rings = std::min(std::max(1, 2 * rings), std::max(options.max_ring_size, options.ring_size));
+      if (options.regularity != RegularityMode::AllFaces) {
+        region.assign(nf, 0);
+        add_bad(current, region, rings, nullptr);
+      }
+      add_bad(current, active, 1, nullptr);
+      for (int f = 0; f < nf; ++f) touched[f] = touched[f] || is_bad(current.state[f]);
+    }
+    // Re-linearize around the faces that were repaired.
+    if (options.regularity != RegularityMode::AllFaces) {
+      region = touched;
+      dilate(region, std::max(0, options.ring_size));
+    }
+    // Re-linearization around the regular pose (paper §7.1): lowers the energy within the
+    // region while every constraint set contains the current pose.
+    if (current.bad() == 0 && options.relinearization_rounds > 0) {
+      double value = objective(z);
+      for (int round = 0; round < options.relinearization_rounds; ++round) {
+        QPResult::Status status;
+        const double t0 = 0.8 + 0.2 * round / options.relinearization_rounds;
+        const Eigen::VectorXd y = solve_region(region, active, z, current, 0, pb + span * t0,
+                                               pb + span * (t0 + 0.2 / options.relinearization_rounds), &status);
+        Census next = census(y);
+        const double next_value = objective(y);
+        if (next.bad() > 0 || !(next_value < value)) break;
+        ++st.relinearizations;
+        const double drop = (value - next_value) / std::max(value, 1e-300);
+        z = y;
+        current = std::move(next);
+        value = next_value;
+        if (drop < options.relinearization_tolerance) break;
+      }
+    }
+  }
+  report(1.0);
+
+  // Output.
+  Parametrization& p = out.param;
+  p.uv.resize(nc, 2);
+  for (int c = 0; c < nc; ++c) p.uv.row(c) = ev.corner(z, c).transpose();
+  p.rotation = rotation_;
+  p.is_cut = is_cut_;
+  st.flipped = current.flipped;
+  st.degenerate = current.degenerate;
+  st.thin = current.thin;
+  st.min_area_ratio = current.min_ratio;
+  st.energy = field_energy(p);
+  st.constraint_violation = constraint_violation(p);
+  return out;
+}
+
+ParametrizationSolution ParametrizationProblem::solve_with_relinearization(ParametrizationSolveOptions options,
+                                                                           double epsilon, int max_rounds,
+                                                                           Progress& progress) {
+  const double pb = options.progress_begin, span = options.progress_end - options.progress_begin;
+  ParametrizationSolution last;
+  Parametrization pose;
+  bool have_pose = options.reference != nullptr;
+  if (have_pose) pose = *options.reference;
+  ParametrizationSolveStats total;
+  auto accumulate = [&](const ParametrizationSolveStats& s) {
+    total.ipopt_solves += s.ipopt_solves;
+    total.ipopt_iterations += s.ipopt_iterations;
+    total.repair_rounds += s.repair_rounds;
+    total.relinearizations += s.relinearizations;
+    total.seconds_assembly += s.seconds_assembly;
+    total.seconds_cholesky += s.seconds_cholesky;
+    total.seconds_ipopt += s.seconds_ipopt;
+  };
+  const int rounds = std::max(0, max_rounds);
+  for (int round = 0; round < rounds; ++round) {
+    options.linear_constraints = ConstraintMode::Penalty;
+    options.reference = have_pose ? &pose : nullptr;
+    options.progress_begin = pb + span * 0.8 * round / rounds;
+    options.progress_end = pb + span * 0.8 * (round + 1) / rounds;
+    last = solve(options, progress);
+    accumulate(last.stats);
+    pose = last.param;
+    have_pose = true;
+    if (last.stats.constraint_violation <= epsilon) break;
+  }
+  options.linear_constraints = ConstraintMode::Hard;
+  options.reference = have_pose ? &pose : nullptr;
+  options.progress_begin = pb + span * 0.8;
+  options.progress_end = pb + span;
+  ParametrizationSolution final_solution = solve(options, progress);
+  accumulate(final_solution.stats);
+  const ParametrizationSolveStats& s = final_solution.stats;
+  total.free_variables = s.free_variables;
+  total.flipped_initial = s.flipped_initial;
+  total.degenerate_initial = s.degenerate_initial;
+  total.thin_initial = s.thin_initial;
+  total.flipped = s.flipped;
+  total.degenerate = s.degenerate;
+  total.thin = s.thin;
+  total.forced_degenerate = s.forced_degenerate;
+  total.min_area_ratio = s.min_area_ratio;
+  total.energy = s.energy;
+  total.energy_initial = s.energy_initial;
+  total.constraint_violation = s.constraint_violation;
+  total.max_region_faces = s.max_region_faces;
+  total.max_qp_variables = s.max_qp_variables;
+  total.non_integer_pivots = s.non_integer_pivots;
+  total.redundant_constraints = s.redundant_constraints;
+  total.inconsistent_constraints = s.inconsistent_constraints;
+  final_solution.stats = total;
+  return final_solution;
+}
+
+}  // namespace qgp
