@@ -94,6 +94,12 @@ def _declare(lib):
         "qgp_intake_counts": (c_int, [vp, p_int64, p_int64, p_int64]),
         "qgp_intake_fetch": (c_int, [vp, p_double, p_int32, p_int32, p_int32]),
     }
+    sigs.update({
+        "qgp_soup_read": (c_int, [c_char_p, ctypes.POINTER(vp)]),
+        "qgp_soup_counts": (c_int, [vp, p_int64, p_int64, p_int64]),
+        "qgp_soup_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
+        "qgp_soup_free": (None, [vp]),
+    })
     optional = {
         "qgp_result_quad_counts": (c_int, [vp, p_int64, p_int64]),
         "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
@@ -111,6 +117,28 @@ def _declare(lib):
 
 def version():
     return load_library().qgp_version().decode()
+
+
+def read_mesh_file(path):
+    """Reads OBJ / PLY / OFF as it is: (vertices (n,3) float64, face sizes (f,) int32, corners (c,) int32)."""
+    lib = load_library()
+    handle = ctypes.c_void_p()
+    status = lib.qgp_soup_read(os.fsencode(path), ctypes.byref(handle))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    try:
+        nv, nf, nc = ctypes.c_int64(), ctypes.c_int64(), ctypes.c_int64()
+        lib.qgp_soup_counts(handle, ctypes.byref(nv), ctypes.byref(nf), ctypes.byref(nc))
+        v = np.empty((nv.value, 3), np.float64)
+        sizes = np.empty(nf.value, np.int32)
+        corners = np.empty(nc.value, np.int32)
+        status = lib.qgp_soup_fetch(handle, _ptr(v, ctypes.c_double), _ptr(sizes, ctypes.c_int32),
+                                    _ptr(corners, ctypes.c_int32))
+        if status != OK:
+            raise QGPError(status, lib.qgp_last_error().decode())
+        return v, sizes, corners
+    finally:
+        lib.qgp_soup_free(handle)
 
 
 def _ptr(array, ctype):
@@ -220,3 +248,29 @@ class Session:
         self._check(self._lib.qgp_intake_fetch(self._handle, _ptr(v, ctypes.c_double), _ptr(f, ctypes.c_int32),
                                                _ptr(comp, ctypes.c_int32), _ptr(iv, ctypes.c_int32)))
         return v, f, comp, iv
+
+    def quad_mesh(self):
+        """(vertices (n,3) float64, quads (q,4) int32 CCW, source triangle per quad (q,) int32)."""
+        if not hasattr(self._lib, "qgp_result_quad_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return quad meshes")
+        nv, nq = ctypes.c_int64(), ctypes.c_int64()
+        self._check(self._lib.qgp_result_quad_counts(self._handle, ctypes.byref(nv), ctypes.byref(nq)))
+        v = np.empty((nv.value, 3), np.float64)
+        q = np.empty((nq.value, 4), np.int32)
+        src = np.empty(nq.value, np.int32)
+        self._check(self._lib.qgp_result_quad_fetch(self._handle, _ptr(v, ctypes.c_double),
+                                                    _ptr(q, ctypes.c_int32), _ptr(src, ctypes.c_int32)))
+        return v, q, src
+
+    def grid_uv(self, num_triangles):
+        """Integer-grid map per input triangle corner, (num_triangles, 3, 2) float64 (1 unit = 1 quad;
+        NaN where intake removed the triangle), and the cut edges as input vertex pairs (k, 2) int32."""
+        if not hasattr(self._lib, "qgp_result_uv_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return grid UVs")
+        ncut = ctypes.c_int64()
+        self._check(self._lib.qgp_result_uv_counts(self._handle, ctypes.byref(ncut)))
+        uv = np.empty((num_triangles, 3, 2), np.float64)
+        cuts = np.empty((ncut.value, 2), np.int32)
+        self._check(self._lib.qgp_result_uv_fetch(self._handle, _ptr(uv, ctypes.c_double),
+                                                  _ptr(cuts, ctypes.c_int32)))
+        return uv, cuts

@@ -106,6 +106,15 @@ QGP_API int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64
 QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
                              int32_t* component, int32_t* input_vertex);
 
+/* Reading a mesh file as it is (polygons, no repair), e.g. to import it into Blender. */
+typedef struct qgp_soup qgp_soup;
+QGP_API int qgp_soup_read(const char* path, qgp_soup** out_soup);
+/* num_corners: total number of face corners (sum of face sizes). */
+QGP_API int qgp_soup_counts(qgp_soup* soup, int64_t* num_vertices, int64_t* num_faces, int64_t* num_corners);
+/* vertices: nv x 3; face_sizes: nf; corners: num_corners vertex indices, faces concatenated. */
+QGP_API int qgp_soup_fetch(qgp_soup* soup, double* vertices, int32_t* face_sizes, int32_t* corners);
+QGP_API void qgp_soup_free(qgp_soup* soup);
+
 #ifdef __cplusplus
 }
 #endif

@@ -17,6 +17,10 @@
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 
+struct qgp_soup {
+  qgp::PolygonSoup soup;
+};
+
 struct qgp_session {
   std::unique_ptr<qgp::Session> session;
   std::thread worker;
@@ -349,5 +353,43 @@ int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
     return QGP_OK;
   });
 }
+
+int qgp_soup_read(const char* path, qgp_soup** out_soup) {
+  return guarded(nullptr, [&] {
+    require(out_soup != nullptr, "out_soup is null");
+    *out_soup = nullptr;
+    require(path != nullptr, "path is null");
+    auto soup = std::make_unique<qgp_soup>();
+    soup->soup = qgp::read_mesh_file(path);
+    *out_soup = soup.release();
+    return QGP_OK;
+  });
+}
+
+int qgp_soup_counts(qgp_soup* soup, int64_t* num_vertices, int64_t* num_faces, int64_t* num_corners) {
+  return guarded(nullptr, [&] {
+    require(soup != nullptr, "soup is null");
+    if (num_vertices) *num_vertices = soup->soup.num_vertices();
+    if (num_faces) *num_faces = soup->soup.num_faces();
+    if (num_corners) *num_corners = static_cast<int64_t>(soup->soup.face_vertices.size());
+    return QGP_OK;
+  });
+}
+
+int qgp_soup_fetch(qgp_soup* soup, double* vertices, int32_t* face_sizes, int32_t* corners) {
+  return guarded(nullptr, [&] {
+    require(soup != nullptr, "soup is null");
+    const qgp::PolygonSoup& s = soup->soup;
+    if (vertices)
+      for (int v = 0; v < s.num_vertices(); ++v)
+        for (int k = 0; k < 3; ++k) vertices[3 * v + k] = s.positions[v][k];
+    if (face_sizes)
+      for (int f = 0; f < s.num_faces(); ++f) face_sizes[f] = s.face_size(f);
+    if (corners) std::copy(s.face_vertices.begin(), s.face_vertices.end(), corners);
+    return QGP_OK;
+  });
+}
+
+void qgp_soup_free(qgp_soup* soup) { delete soup; }
 
 }  // extern "C"
