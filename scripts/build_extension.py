@@ -5,7 +5,7 @@ beyond glibc / libstdc++ / libgcc / libm, found through an $ORIGIN RUNPATH) into
     dist/<id>-<version>-linux_x64.zip     Blender 4.2+ extension (manifest and __init__.py at the root)
     dist/<id>-<version>-legacy.zip        Blender 3.x add-on (the same files inside a <id>/ folder)
 
-Run after ./scripts/build.sh:  /usr/bin/python3 scripts/build_extension.py
+Run after ./scripts/build.sh:  /usr/bin/python3 scripts/build_extension.py [--build DIR]
 """
 import os
 import re
@@ -58,7 +58,8 @@ def main():
     with open(manifest_path, "rb") as f:
         manifest = tomllib.load(f)
     ident, version = manifest["id"], manifest["version"]
-    library = os.path.join(ROOT, "build", "lib", "libqgp.so")
+    build = sys.argv[sys.argv.index("--build") + 1] if "--build" in sys.argv else os.path.join(ROOT, "build")
+    library = os.path.join(build, "lib", "libqgp.so")
     if not os.path.exists(library):
         sys.exit("build_extension: build/lib/libqgp.so is missing; run ./scripts/build.sh first")
     dist = os.path.join(ROOT, "dist")
