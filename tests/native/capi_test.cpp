@@ -182,7 +182,9 @@ TEST(CApi, CancelTakesEffectWithinOneSecond) {
   std::printf("cancel: state %d after %.3f s\n", state, seconds);
   if (state == QGP_STATE_CANCELLED) {
     EXPECT_EQ(status, QGP_ERR_CANCELLED);
+#ifndef QGP_SANITIZED  // sanitizer builds run several times slower; the figure is printed above
     EXPECT_LT(seconds, 1.0);
+#endif
   } else {
     // The job may have finished before the cancel arrived; it must then be complete.
     EXPECT_EQ(state, QGP_STATE_DONE);
@@ -228,6 +230,35 @@ TEST(CApi, RemeshReportsTheStageThatIsMissing) {
     EXPECT_EQ(report["error"]["message"], message);
   }
   qgp_session_free(s);
+}
+
+TEST(CApi, ResultsAreNotReadyBeforeAJobProducesThem) {
+  qgp_session* s = create(make_grid(3));
+  int64_t nv = -1, nq = -1, ncut = -1;
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
+  EXPECT_EQ(qgp_result_uv_counts(s, &ncut), QGP_ERR_NOT_READY);
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
+  EXPECT_NE(std::string(qgp_session_error(s)).find("remesh"), std::string::npos);
+  qgp_session_free(s);
+}
+
+TEST(CApi, SoupReaderKeepsPolygons) {
+  qgp_soup* soup = nullptr;
+  ASSERT_EQ(qgp_soup_read((std::string(QGP_MESH_DIR) + "/torus.obj").c_str(), &soup), QGP_OK);
+  int64_t nv = 0, nf = 0, nc = 0;
+  ASSERT_EQ(qgp_soup_counts(soup, &nv, &nf, &nc), QGP_OK);
+  EXPECT_EQ(nv, 2304);
+  EXPECT_EQ(nf, 4608);
+  std::vector<double> v(3 * nv);
+  std::vector<int32_t> sizes(nf), corners(nc);
+  ASSERT_EQ(qgp_soup_fetch(soup, v.data(), sizes.data(), corners.data()), QGP_OK);
+  int64_t total = 0;
+  for (int32_t n : sizes) total += n;
+  EXPECT_EQ(total, nc);
+  qgp_soup_free(soup);
+  EXPECT_EQ(qgp_soup_read("/nonexistent.ply", &soup), QGP_ERR_UNREADABLE_FILE);
+  EXPECT_EQ(soup, nullptr);
 }
 
 TEST(CApi, CreateFromFile) {
