@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <set>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -344,8 +345,36 @@ TEST(QuadExtraction, CubeQuadsLieOnTheCube) {
   EXPECT_NEAR(m.p95_angle_deviation, 0, 1e-6);
   EXPECT_EQ(m.irregular_vertices, 8);
   // Grid vertices sit on the lattice of spacing 1/3.
-  for (int v = 0; v < r.quads.num_vertices(); ++v)
-    for (int a = 0; a < 3; ++a) EXPECT_NEAR(r.quads.V(v, a) * 3, std::round(r.quads.V(v, a) * 3), 1e-9);
+  std::map<std::array<long, 3>, int> at;
+  for (int v = 0; v < r.quads.num_vertices(); ++v) {
+    std::array<long, 3> key;
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(r.quads.V(v, a) * 3, std::round(r.quads.V(v, a) * 3), 1e-9);
+      key[a] = std::lround(r.quads.V(v, a) * 3);
+    }
+    EXPECT_TRUE(at.emplace(key, v).second) << "two quad vertices at one point";
+  }
+  // The cube's sharp edges (features on integer isolines) are covered by quad edges.
+  std::set<std::pair<int, int>> quad_edges;
+  for (int q = 0; q < r.quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = r.quads.Q(q, k), b = r.quads.Q(q, (k + 1) % 4);
+      quad_edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  int covered = 0;
+  for (const auto& [key, v] : at)
+    for (int axis = 0; axis < 3; ++axis) {
+      // Points on a cube edge along `axis`: the other two coordinates are 0 or 12.
+      const int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
+      if ((key[o1] != 0 && key[o1] != 12) || (key[o2] != 0 && key[o2] != 12) || key[axis] == 12) continue;
+      std::array<long, 3> next = key;
+      ++next[axis];
+      auto it = at.find(next);
+      ASSERT_NE(it, at.end());
+      EXPECT_TRUE(quad_edges.count({std::min(v, it->second), std::max(v, it->second)}));
+      ++covered;
+    }
+  EXPECT_EQ(covered, 12 * 12);
 }
 
 TEST(QuadExtraction, Tori) {
@@ -538,6 +567,23 @@ TEST(QuadExtraction, MalformedInputIsRefused) {
       break;
     }
   EXPECT_THROW(extract_quads(torus.mesh, bad_translation, QuadExtractionOptions{}, progress), Error);
+}
+
+TEST(QuadExtraction, HugeMapsAreRefusedQuickly) {
+  const auto cube = scaled(test::make_grid_cube(2), 100000);  // 2.4e11 quads
+  Progress progress;
+  Timer timer;
+  EXPECT_THROW(extract_quads(cube.mesh, to_igm(cube.mesh, cube.param, 4), QuadExtractionOptions{}, progress), Error);
+  const auto small = scaled(test::make_grid_cube(3), 3);
+  QuadExtractionOptions limited;
+  limited.max_quads = 100;
+  try {
+    extract_quads(small.mesh, to_igm(small.mesh, small.param), limited, progress);
+    ADD_FAILURE() << "the quad limit was ignored";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::StageFailed);
+    EXPECT_NE(std::string(e.what()).find("486"), std::string::npos) << e.what();
+  }
 }
 
 TEST(QuadExtraction, CancelStopsTheExtraction) {

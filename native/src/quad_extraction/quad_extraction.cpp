@@ -186,11 +186,25 @@ class Extractor {
     whole += rest / unit2;
     s.area_is_integral = rest % unit2 == 0;
     s.expected_quads = static_cast<int64_t>(whole);
+    if (whole > options_.max_quads)
+      throw Error(ErrorCode::StageFailed, "quad extraction: the map's parametric area asks for " +
+                                              std::to_string(s.expected_quads) + " quads, more than the limit of " +
+                                              std::to_string(options_.max_quads));
+    scan_budget_ = 8 * options_.max_quads + 64 * int64_t(mesh_.num_faces()) + 1000000;
     if (!options_.allow_defects && (s.flipped_triangles > 0 || s.degenerate_triangles > 0)) throw_defects();
   }
 
   // ------------------------------------------------------------------------------------------
   // Grid points and their rays.
+
+  // Counts one step of scanning grid lines; throws once the budget is spent.
+  void spend_scan() {
+    if (--scan_budget_ < 0)
+      throw Error(ErrorCode::StageFailed,
+                  "quad extraction: scanning the grid lines exceeds the work budget (the map's triangles span "
+                  "far more grid lines than max_quads allows)");
+    if ((scan_budget_ & 65535) == 0) progress_.check_cancel();
+  }
 
   bool is_grid(const IVec2& p) const { return p[0] % one_ == 0 && p[1] % one_ == 0; }
 
@@ -279,6 +293,7 @@ class Extractor {
       if (d[m] == 0) continue;
       const int64_t lo = std::min(A[m], B[m]), hi = std::max(A[m], B[m]);
       for (int64_t x = (floor_div(lo, one_) + 1) * one_; x < hi; x += one_) {
+        spend_scan();
         const i128 num = i128(x - A[m]) * d[n];
         if (num % d[m] != 0) continue;
         const int64_t y = A[n] + static_cast<int64_t>(num / d[m]);
@@ -319,7 +334,9 @@ class Extractor {
         if (ymin > ymax) continue;
         const int64_t ylo = (static_cast<int64_t>(std::floor(ymin / double(one_))) - 1) * one_;
         const int64_t yhi = (static_cast<int64_t>(std::ceil(ymax / double(one_))) + 1) * one_;
+        spend_scan();
         for (int64_t y = ylo; y <= yhi; y += one_) {
+          spend_scan();
           const IVec2 q{x, y};
           if (orient2d_exact(P[0], P[1], q) <= 0 || orient2d_exact(P[1], P[2], q) <= 0 ||
               orient2d_exact(P[2], P[0], q) <= 0)
@@ -630,6 +647,7 @@ class Extractor {
   std::unordered_map<PointKey, int, PointKeyHash> edge_point_;  // (coords in edge_halfedge's chart, edge)
   std::unordered_map<PointKey, int, PointKeyHash> face_point_;  // (coords, face)
   int64_t step_budget_ = 0;
+  int64_t scan_budget_ = 0;
 };
 
 }  // namespace

@@ -29,6 +29,9 @@ struct QuadExtractionOptions {
   // leaving the surface, faces that are not quads, ...). true: skip what cannot be extracted and
   // report the counts in the stats (the quad mesh may then have holes).
   bool allow_defects = false;
+  // Refuse maps whose parametric area (the quad count) exceeds this, and bound the work spent on
+  // scanning grid lines accordingly, so that a wild map cannot exhaust time or memory.
+  int64_t max_quads = 50000000;
 };
 
 struct QuadExtractionStats {
