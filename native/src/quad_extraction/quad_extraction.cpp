@@ -381,7 +381,8 @@ class Extractor {
   bool spend_step() {
     ++result_.stats.triangle_steps;
     if ((result_.stats.triangle_steps & 65535) == 0) progress_.check_cancel();
-    return result_.stats.triangle_steps <= step_budget_;
+    if (result_.stats.triangle_steps > step_budget_) budget_exhausted_ = true;
+    return !budget_exhausted_;
   }
 
   // Follows the isoline from `start` (in face f's chart, direction dir, its first part inside the
@@ -544,8 +545,8 @@ class Extractor {
         ray.dest_point = ray.dest_ray = -1;
         note_defect("isoline from face " + std::to_string(ray.face) + " direction " + std::to_string(ray.dir) +
                     ": " + why);
-        if (why == "tracing exceeded its step budget") {
-          note_defect(why);
+        if (budget_exhausted_) {
+          // The map is wild: give up on the remaining isolines.
           if (!options_.allow_defects) throw_defects();
           break;
         }
@@ -648,6 +649,7 @@ class Extractor {
   std::unordered_map<PointKey, int, PointKeyHash> face_point_;  // (coords, face)
   int64_t step_budget_ = 0;
   int64_t scan_budget_ = 0;
+  bool budget_exhausted_ = false;
 };
 
 }  // namespace
