@@ -113,11 +113,14 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
       const double angle = l > 0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) * 180 / M_PI : 0;
       deviations.push_back(std::abs(angle - 90));
     }
-    // Reference normal: average of the surface normals at the closest points of the corners and
-    // the centroid (one lookup alone is unstable for coarse quads on curved surfaces).
+    // Reference normal: sum of the surface normals at the closest points of five interior points
+    // of the bilinear quad (interior points, unlike corners on a sharp edge, have an unambiguous
+    // closest triangle when the quad lies on the surface).
     Vec3 reference_normal = Vec3::Zero();
-    for (int k = 0; k <= 4; ++k) {
-      const Vec3 x = k < 4 ? p[k] : Vec3((p[0] + p[1] + p[2] + p[3]) / 4);
+    const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}};
+    for (const auto& st : at) {
+      const Vec3 x = (1 - st[0]) * (1 - st[1]) * p[0] + st[0] * (1 - st[1]) * p[1] + st[0] * st[1] * p[2] +
+                     (1 - st[0]) * st[1] * p[3];
       const TriangleBvh::Hit hit = reference_bvh.closest_point(x);
       if (hit.triangle >= 0) reference_normal += reference.face_normal_unnormalized(hit.triangle).normalized();
     }

@@ -42,7 +42,7 @@ struct QuadMetrics {
   double mean_angle_deviation = 0;   // degrees, |corner angle - 90| over all corners
   double p95_angle_deviation = 0;    // degrees, 95th percentile
   int flipped_quads = 0;             // quad normal (of its diagonals) against the mean reference
-                                     // normal at the closest points of its corners and centroid
+                                     // normal at the closest points of five interior points
   double hausdorff = 0;              // max of the two directions, relative to the bbox diagonal
   double hausdorff_quads_to_mesh = 0;
   double hausdorff_mesh_to_quads = 0;
