@@ -841,6 +841,27 @@ TEST(QuadExtraction, MetricsAndReport) {
   EXPECT_EQ(s["expected_quads"].get<int64_t>(), 384);
 }
 
+TEST(QuadExtraction, AppendMergesComponents) {
+  const auto cube = scaled(test::make_grid_cube(2), 2);
+  const auto torus = test::make_grid_torus(8, 6);
+  Progress progress;
+  const auto a = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress);
+  const auto b = extract_quads(torus.mesh, to_igm(torus.mesh, torus.param), QuadExtractionOptions{}, progress);
+  QuadMesh all;
+  append_quad_mesh(all, a.quads, 0);
+  append_quad_mesh(all, b.quads, 1);
+  ASSERT_EQ(all.num_quads(), a.quads.num_quads() + b.quads.num_quads());
+  ASSERT_EQ(all.num_vertices(), a.quads.num_vertices() + b.quads.num_vertices());
+  EXPECT_EQ(all.component.front(), 0);
+  EXPECT_EQ(all.component.back(), 1);
+  EXPECT_EQ(all.vertex_singular.size(), static_cast<size_t>(all.num_vertices()));
+  EXPECT_EQ(all.quad_face.size(), static_cast<size_t>(all.num_quads()));
+  const QuadTopology t = quad_topology(all);
+  EXPECT_EQ(t.euler_characteristic, 2 + 0);  // sphere + torus
+  EXPECT_EQ(t.non_manifold_edges + t.inconsistent_edges + t.unreferenced_vertices, 0);
+  EXPECT_EQ(all.Q(all.num_quads() - 1, 0), b.quads.Q(b.quads.num_quads() - 1, 0) + a.quads.num_vertices());
+}
+
 // Prints figures for ~100k quads (no timing assertion).
 TEST(QuadExtraction, BenchmarkHundredThousandQuads) {
   struct Case { std::string name; SyntheticParametrized s; int64_t quads; };

@@ -660,6 +660,30 @@ QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& ig
   return extractor.run();
 }
 
+void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
+  const int nv = into.num_vertices(), nq = into.num_quads();
+  const bool had_vertex_data = into.vertex_face.size() == static_cast<size_t>(nv) &&
+                               into.vertex_singular.size() == static_cast<size_t>(nv);
+  const bool had_quad_face = into.quad_face.size() == static_cast<size_t>(nq);
+  into.V.conservativeResize(nv + part.num_vertices(), 3);
+  into.V.bottomRows(part.num_vertices()) = part.V;
+  into.Q.conservativeResize(nq + part.num_quads(), 4);
+  into.Q.bottomRows(part.num_quads()) = part.Q.array() + nv;
+  into.component.resize(nq, -1);
+  into.component.insert(into.component.end(), part.num_quads(), component);
+  if (had_vertex_data && part.vertex_face.size() == static_cast<size_t>(part.num_vertices()) &&
+      part.vertex_singular.size() == static_cast<size_t>(part.num_vertices())) {
+    into.vertex_face.insert(into.vertex_face.end(), part.vertex_face.begin(), part.vertex_face.end());
+    into.vertex_singular.insert(into.vertex_singular.end(), part.vertex_singular.begin(), part.vertex_singular.end());
+  } else {
+    into.vertex_face.clear(), into.vertex_singular.clear();
+  }
+  if (had_quad_face && part.quad_face.size() == static_cast<size_t>(part.num_quads()))
+    into.quad_face.insert(into.quad_face.end(), part.quad_face.begin(), part.quad_face.end());
+  else
+    into.quad_face.clear();
+}
+
 Json quad_extraction_stats_json(const QuadExtractionStats& s) {
   Json j;
   j["grid_points"] = {{"vertices", s.grid_points_on_vertices},

@@ -65,6 +65,10 @@ struct QuadExtraction {
 QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& igm,
                              const QuadExtractionOptions& options, Progress& progress);
 
+// Appends `part` (e.g. one intake component's quads) to `into`, offsetting vertex indices and
+// tagging its quads with `component` (per-vertex/per-quad source data is kept only if both have it).
+void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component);
+
 // Stats as JSON (for the `quad` / diagnostics part of the report).
 Json quad_extraction_stats_json(const QuadExtractionStats& stats);
 
