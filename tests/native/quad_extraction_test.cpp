@@ -575,7 +575,7 @@ TEST(QuadExtraction, TutteRectanglesOnRealMeshes) {
         Timer timer;
         const auto r = extract_and_check(name + " " + std::to_string(size[0]) + "x" + std::to_string(size[1]),
                                          tutte.mesh, igm, size[0] * size[1], false);
-        std::printf("%-18s %6d triangles %5d quads: %7lld triangle steps, %.3f s\n", name.c_str(), disc.num_faces(),
+        std::printf("%-18s %6d triangles %5d quads: %7lld triangle steps, extract+check %.3f s\n", name.c_str(), disc.num_faces(),
                     r.quads.num_quads(), static_cast<long long>(r.stats.triangle_steps), timer.seconds());
       }
       EXPECT_TRUE(done) << name << ": no flip-free Tutte map";
@@ -649,7 +649,7 @@ TEST(QuadExtraction, QuadMeshMapsOfRealMeshesWithSingularitiesOfEveryValence) {
       int max_valence = 0;
       const QuadTopology topo = quad_topology(r.quads);
       for (int v = 0; v < r.quads.num_vertices(); ++v) max_valence = std::max(max_valence, topo.valence[v]);
-      std::printf("%-14s k=%d %6d triangles %6d quads %5d singular (max valence %d) %.3f s\n", name.c_str(), k,
+      std::printf("%-14s k=%d %6d triangles %6d quads %5d singular (max valence %d), extract+check %.3f s\n", name.c_str(), k,
                   qm.map.mesh.num_faces(), r.quads.num_quads(), r.stats.singular_vertices, max_valence,
                   timer.seconds());
     }
