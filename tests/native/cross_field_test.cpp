@@ -115,11 +115,12 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
 
   // Hard constraints: a face with one feature/boundary edge contains its direction (1e-9 rad);
   // a face with two maps them to orthogonal isolines, each off by |45deg - beta/2|.
-  int bad_single = -1, bad_double = -1, bad_constrained = -1;
+  int bad_single = -1, bad_double = -1, bad_constrained = -1, overconstrained = 0;
   for (int f = 0; f < nf; ++f) {
     std::vector<int> constraint;
     for (int k = 0; k < 3; ++k)
       if (is_constraint_halfedge(mesh, field, 3 * f + k)) constraint.push_back(3 * f + k);
+    overconstrained += constraint.size() == 3;
     if (static_cast<bool>(field.constrained_face[f]) != !constraint.empty()) bad_constrained = f;
     if (constraint.size() == 1) {
       const double a = test::angle_in_chart(mesh, constraint[0], field.direction[f]);
@@ -138,6 +139,7 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
         bad_double = f;
     }
   }
+  EXPECT_EQ(field.num_overconstrained_faces, overconstrained);
   EXPECT_EQ(bad_constrained, -1) << "constrained_face differs from the faces next to features";
   EXPECT_EQ(bad_single, -1) << "face with one feature edge is not aligned to it";
   EXPECT_EQ(bad_double, -1) << "face with two feature edges does not use the symmetric orthogonal compromise";

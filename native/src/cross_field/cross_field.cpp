@@ -198,8 +198,13 @@ ComplexSparse smoothness_matrix(const TriMesh& mesh, const FaceFrames& fr, const
 
 using Solver = Eigen::CholmodDecomposition<ComplexSparse, Eigen::Lower>;
 
-void factorize(Solver& solver, const ComplexSparse& A) {
-  solver.compute(A);
+// Ordering + symbolic analysis, then the numeric factorization, with a cancel check between (on
+// igea, 268k faces, with Debian's reference BLAS: 0.25 s + 1.8 s CPU; CHOLMOD cannot be
+// interrupted inside either step).
+void factorize(Solver& solver, const ComplexSparse& A, const Progress& progress) {
+  solver.analyzePattern(A);
+  progress.check_cancel();
+  solver.factorize(A);
   if (solver.info() != Eigen::Success)
     throw Error(ErrorCode::StageFailed, "cross field: sparse factorization failed (" +
                                             std::to_string(A.rows()) + " unknowns)");
@@ -228,7 +233,7 @@ ComplexVector solve_constrained(const ComplexSparse& A, const std::vector<char>&
   A_free.setFromTriplets(triplets.begin(), triplets.end());
   progress.update(0.3);
   Solver solver;
-  factorize(solver, A_free);
+  factorize(solver, A_free, progress);
   progress.update(0.6);
   const ComplexVector z_free = solver.solve(rhs);
   for (int f = 0; f < n; ++f)
@@ -248,7 +253,7 @@ ComplexVector smallest_eigenvector(const ComplexSparse& A, const std::vector<dou
   for (int f = 0; f < n; ++f) shifted.coeffRef(f, f) += shift * mass[f];
   progress.update(0.2);
   Solver solver;
-  factorize(solver, shifted);
+  factorize(solver, shifted, progress);
   progress.update(0.4);
 
   std::mt19937 random(12345);
@@ -321,6 +326,11 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
   field.constrained_face.assign(nf, 0);
   ComplexVector z_fixed = ComplexVector::Zero(nf);
   int num_constrained = 0;
+  for (int f = 0; f < nf; ++f) {
+    int count = 0;
+    for (int k = 0; k < 3; ++k) count += is_feature_halfedge(mesh, field.feature_edge, 3 * f + k);
+    field.num_overconstrained_faces += count == 3;
+  }
   for (int f = 0; f < nf; ++f)
     if (constrained_angle(mesh, fr, field.feature_edge, f, &theta[f])) {
       field.constrained_face[f] = 1;

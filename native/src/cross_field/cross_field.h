@@ -66,6 +66,9 @@ struct CrossField {
                                       // across interior feature edges:
                                       //   q(opposite) = (q(h) + matching[h] + 2) % 4.
                                       // -1 on all other halfedges.
+  int num_overconstrained_faces = 0;  // faces with three feature/boundary edges: no triangle can
+                                      // have all three on isolines (the seamless map must give
+                                      // one up or the face must be split)
   int num_singularities = 0;          // vertices with vertex_index != 0
   int index_sum = 0;                  // sum of vertex_index (quarter turns) = 4 * chi
   int euler_characteristic = 0;       // of the mesh

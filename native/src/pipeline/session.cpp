@@ -134,7 +134,7 @@ void Session::run_field_stages(Progress& progress) {
   // Report: totals plus one entry per component. index_sum is in full index units (quarter
   // turns / 4) so that it reads as the Euler characteristic.
   Json per_component = Json::array();
-  int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0;
+  int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0, overconstrained = 0;
   for (const ComponentState& state : components_) {
     const CrossField& field = *state.field;
     int features = 0;
@@ -144,17 +144,20 @@ void Session::run_field_stages(Progress& progress) {
                              {"index_sum", field.index_sum / 4},
                              {"euler_characteristic", field.euler_characteristic},
                              {"feature_edges", features},
+                             {"overconstrained_faces", field.num_overconstrained_faces},
                              {"cut_edges", state.cut->num_cut_edges}});
     singularities += field.num_singularities;
     index_quarters += field.index_sum;
     euler += field.euler_characteristic;
     feature_edges += features;
     cut_edges += state.cut->num_cut_edges;
+    overconstrained += field.num_overconstrained_faces;
   }
   report_["field"] = {{"singularities", singularities},
                       {"index_sum", index_quarters / 4},
                       {"euler_characteristic", euler},
                       {"feature_edges", feature_edges},
+                      {"overconstrained_faces", overconstrained},
                       {"cut_edges", cut_edges},
                       {"components", std::move(per_component)}};
 }
