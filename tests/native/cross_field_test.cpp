@@ -20,7 +20,7 @@ bool is_constraint_halfedge(const TriMesh& mesh, const CrossField& field, int h)
 
 // Checks every invariant of a computed field; failures name the first offending element.
 void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angle_deg,
-                 const std::vector<char>& caller_features = {}) {
+                 const std::vector<char>& caller_features = {}, int collapsed_allowance = 0) {
   const int nv = mesh.num_vertices(), ne = mesh.num_edges(), nf = mesh.num_faces(), nh = mesh.num_halfedges();
   ASSERT_EQ(static_cast<int>(field.direction.size()), nf);
   ASSERT_EQ(static_cast<int>(field.matching.size()), nh);
@@ -56,7 +56,7 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
   EXPECT_EQ(bad_feature, -1) << "feature flag differs from the dihedral/caller features";
 
   // Matching convention: R^r maps the edge's chart vector on this side onto the far side's one,
-  // up to at most 45 degrees; opposite halfedges carry inverse rotations.
+  // up to at most 45 degrees (90 across feature edges); opposite halfedges carry inverses.
   std::vector<double> eps(nh, 0.0);
   int bad_inverse = -1, bad_nearest = -1, bad_boundary = -1;
   for (int h = 0; h < nh; ++h) {
@@ -69,7 +69,8 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
     const double here = test::angle_in_chart(mesh, h, field.direction[h / 3]);
     const double there = test::angle_in_chart(mesh, o, field.direction[o / 3]) + M_PI;
     eps[h] = test::wrap_angle(there - here - field.matching[h] * kQuarter);
-    if (std::abs(eps[h]) > M_PI / 4 + 1e-9) bad_nearest = h;
+    const double limit = field.feature_edge[mesh.edge_of[h]] ? M_PI / 2 : M_PI / 4;
+    if (std::abs(eps[h]) > limit + 1e-9) bad_nearest = h;
   }
   EXPECT_EQ(bad_inverse, -1) << "matching[opposite] != (4 - matching[h]) % 4";
   EXPECT_EQ(bad_nearest, -1) << "matching is not the nearest quarter turn";
@@ -89,7 +90,7 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
     rho[h] = test::wrap_angle(test::angle_in_chart(mesh, h, field.direction[h / 3]) - field.edge_sector[h] * kQuarter);
     const int o = mesh.opposite[h];
     if (o >= 0 && field.edge_sector[o] != (field.edge_sector[h] + field.matching[h] + 2) % 4) bad_sector_pair = h;
-    if (std::abs(rho[h]) > M_PI / 4 + 1e-9 && o < 0) bad_sector = h;
+    if (std::abs(rho[h]) > M_PI / 4 + 1e-9) bad_sector = h;
   }
   EXPECT_EQ(bad_sector, -1) << "edge_sector missing, misplaced or off by more than 45 degrees";
   EXPECT_EQ(bad_sector_pair, -1) << "edge sectors inconsistent across a feature edge";
@@ -113,16 +114,20 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
   EXPECT_EQ(bad_index, -1) << "index differs from (defect - field rotation) / 90deg";
   EXPECT_EQ(bad_holonomy, -1) << "index is not the holonomy of the matchings mod 4";
 
-  // Hard constraints: a face with one feature/boundary edge contains its direction (1e-9 rad);
-  // a face with two maps them to orthogonal isolines, each off by |45deg - beta/2|.
-  int bad_single = -1, bad_double = -1, bad_constrained = -1, overconstrained = 0;
+  // Hard constraints: a face aligned to its one feature/boundary edge contains its direction
+  // (1e-9 rad); a face with two maps them to orthogonal isolines, each off by |45deg - beta/2|.
+  int bad_kind = -1, bad_single = -1, bad_double = -1, overconstrained = 0;
+  std::vector<char> overconstrained_face(nf, 0);
   for (int f = 0; f < nf; ++f) {
     std::vector<int> constraint;
     for (int k = 0; k < 3; ++k)
       if (is_constraint_halfedge(mesh, field, 3 * f + k)) constraint.push_back(3 * f + k);
-    overconstrained += constraint.size() == 3;
-    if (static_cast<bool>(field.constrained_face[f]) != !constraint.empty()) bad_constrained = f;
-    if (constraint.size() == 1) {
+    overconstrained += overconstrained_face[f] = constraint.size() == 3;
+    const int kind = field.constrained_face[f];
+    if (kind < 0 || kind > 3 || (kind == 1) != (constraint.size() == 1 && kind != 3) ||
+        (kind == 2) != (constraint.size() >= 2) || (kind == 0 && !constraint.empty()))
+      bad_kind = f;
+    if (kind == 1) {
       const double a = test::angle_in_chart(mesh, constraint[0], field.direction[f]);
       if (std::abs(std::remainder(a, kQuarter)) > 1e-9) bad_single = f;
     } else if (constraint.size() == 2) {
@@ -140,9 +145,46 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
     }
   }
   EXPECT_EQ(field.num_overconstrained_faces, overconstrained);
-  EXPECT_EQ(bad_constrained, -1) << "constrained_face differs from the faces next to features";
+  EXPECT_EQ(bad_kind, -1) << "constrained_face kind does not match the face's feature edges";
   EXPECT_EQ(bad_single, -1) << "face with one feature edge is not aligned to it";
   EXPECT_EQ(bad_double, -1) << "face with two feature edges does not use the symmetric orthogonal compromise";
+
+  // Feature sectors around each vertex (between consecutive feature/boundary edges) map to whole
+  // quarter turns n that add up to the vertex's quad count (4 - index inside, 2 - index on the
+  // boundary); n >= 1, and exactly 1 for a sector of one face, except at over-constrained faces.
+  int bad_sum = -1, collapsed = 0, collapsed_elsewhere = 0, bad_integral = -1;
+  auto is_constraint = [&](int h) { return is_constraint_halfedge(mesh, field, h); };
+  for (int v = 0; v < nv; ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const int k = static_cast<int>(fan.size());
+    int start = -1;
+    for (int j = 0; j < k && start < 0; ++j)
+      if (is_constraint(fan[j])) start = j;
+    if (start < 0) continue;
+    const bool boundary = is_boundary_vertex(mesh, v);
+    int total = 0;
+    for (int j0 = start, j1; j0 < (boundary ? k : start + k); j0 = j1 + 1) {
+      j1 = j0;
+      bool touches_overconstrained = overconstrained_face[fan[j0 % k] / 3];
+      double swept = rho[fan[j0 % k]] + test::corner_angle_at(mesh, fan[j0 % k]);
+      while (!is_constraint(TriMesh::prev(fan[j1 % k]))) {
+        swept += eps[TriMesh::prev(fan[j1 % k])];
+        ++j1;
+        swept += test::corner_angle_at(mesh, fan[j1 % k]);
+        touches_overconstrained |= overconstrained_face[fan[j1 % k] / 3];
+      }
+      swept -= rho[TriMesh::prev(fan[j1 % k])];
+      const long n = std::lround(swept / kQuarter);
+      if (std::abs(swept / kQuarter - n) > 1e-6) bad_integral = v;
+      total += n;
+      if (n < 1 || (j1 == j0 && n != 1)) ++collapsed, collapsed_elsewhere += !touches_overconstrained;
+    }
+    if (total != (boundary ? 2 : 4) - field.vertex_index[v]) bad_sum = v;
+  }
+  EXPECT_EQ(bad_integral, -1) << "sector angle is not a whole number of quarter turns";
+  EXPECT_EQ(bad_sum, -1) << "sector quarter turns do not add up to the vertex index";
+  EXPECT_EQ(field.num_collapsed_sectors, collapsed);
+  EXPECT_LE(collapsed_elsewhere, collapsed_allowance) << "collapsed sectors away from over-constrained faces";
 }
 
 int count_features(const CrossField& field) {
@@ -156,7 +198,7 @@ class CrossFieldOverMeshes : public ::testing::TestWithParam<test::FieldCase> {}
 TEST_P(CrossFieldOverMeshes, InvariantsPerComponent) {
   const test::FieldCase& c = GetParam();
   const IntakeResult intake = test::load_mesh(c.file);
-  int singularities = 0, features = 0;
+  int singularities = 0, features = 0, overconstrained = 0, collapsed = 0, compromises = 0;
   for (int comp = 0; comp < static_cast<int>(intake.components.size()); ++comp) {
     SCOPED_TRACE(c.file + " component " + std::to_string(comp));
     const TriMesh mesh = test::component_mesh(intake, comp);
@@ -165,14 +207,18 @@ TEST_P(CrossFieldOverMeshes, InvariantsPerComponent) {
     Progress progress;
     const CrossField field = compute_cross_field(mesh, options, progress);
     EXPECT_EQ(field.euler_characteristic, intake.components[comp].euler_characteristic);
-    check_field(mesh, field, c.sharp_angle_deg);
+    check_field(mesh, field, c.sharp_angle_deg, {}, c.collapsed_allowance);
     singularities += field.num_singularities;
     features += count_features(field);
+    overconstrained += field.num_overconstrained_faces;
+    collapsed += field.num_collapsed_sectors;
+    for (char kind : field.constrained_face) compromises += kind >= 2;
     if (HasFailure()) break;
   }
-  std::printf("[ figures  ] %-28s sharp %3.0f  components %4zu  faces %7d  singularities %5d  feature edges %5d\n",
+  std::printf("[ figures  ] %-28s sharp %3.0f  components %4zu  faces %7d  singularities %5d  feature edges %5d  "
+              "compromise faces %4d  over-constrained faces %3d  collapsed sectors %3d\n",
               c.file.c_str(), c.sharp_angle_deg, intake.components.size(), intake.mesh.num_faces(), singularities,
-              features);
+              features, compromises, overconstrained, collapsed);
   if (c.sharp_angle_deg >= 0 && intake.components.size() == 1) EXPECT_GT(features, 0);
 }
 
@@ -266,6 +312,38 @@ TEST(CrossField, SmoothTorusAndPlanarGrid) {
     for (int f = 0; f < grid.num_faces(); ++f)
       EXPECT_NEAR(std::abs(std::remainder(std::atan2(field.direction[f].y(), field.direction[f].x()), kQuarter)), 0, 1e-9);
   }
+}
+
+TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {
+  // A flat disc: centre, two rings of 24 vertices; feature edges along the spokes to ring
+  // vertices 0 and 2 enclose a 30deg sector of two faces.
+  std::vector<Vec3> points{{0, 0, 0}};
+  std::vector<std::array<int, 3>> faces;
+  const int n = 24;
+  for (int ring = 1; ring <= 2; ++ring)
+    for (int i = 0; i < n; ++i)
+      points.push_back({ring * std::cos(2 * M_PI * i / n), ring * std::sin(2 * M_PI * i / n), 0});
+  auto r1 = [&](int i) { return 1 + i % n; };
+  auto r2 = [&](int i) { return 1 + n + i % n; };
+  for (int i = 0; i < n; ++i) {
+    faces.push_back({0, r1(i), r1(i + 1)});
+    faces.push_back({r1(i), r2(i), r2(i + 1)});
+    faces.push_back({r1(i), r2(i + 1), r1(i + 1)});
+  }
+  const TriMesh disc = test::make_triangles(points, faces);
+  CrossFieldOptions options;
+  options.feature_edges.assign(disc.num_edges(), 0);
+  for (int h = 0; h < disc.num_halfedges(); ++h)
+    if (disc.from(h) == 0 && (disc.to(h) == r1(0) || disc.to(h) == r1(2))) options.feature_edges[disc.edge_of[h]] = 1;
+  Progress progress;
+  const CrossField field = compute_cross_field(disc, options, progress);
+  check_field(disc, field, -1, options.feature_edges);
+  EXPECT_EQ(field.constrained_face[0], 3);  // faces (0, r1(0), r1(1)) and (0, r1(1), r1(2))
+  EXPECT_EQ(field.constrained_face[3], 3);
+  EXPECT_EQ(field.num_collapsed_sectors, 0);
+  // Each spoke is 45deg - 30deg / 2 off its axis (the sector invariants above check the rest).
+  const double a = test::angle_in_chart(disc, 0, field.direction[0]);
+  EXPECT_NEAR(std::abs(std::remainder(a, kQuarter)), M_PI / 6, 1e-9);
 }
 
 TEST(CrossField, TinyComponents) {

@@ -95,7 +95,8 @@ void check_cut(const TriMesh& mesh, const CrossField& field, const CutGraph& cut
     if (!cut.is_cut[mesh.edge_of[h]] && cut.rotation[h] != 0) bad_off_cut = h;
     const double here = test::angle_in_chart(mesh, h, cut.frame_u[h / 3]);
     const double there = test::angle_in_chart(mesh, o, cut.frame_u[o / 3]) + M_PI;
-    if (std::abs(test::wrap_angle(there - here - cut.rotation[h] * kQuarter)) > M_PI / 4 + 1e-9) bad_chart = h;
+    const double limit = field.feature_edge[mesh.edge_of[h]] ? M_PI / 2 : M_PI / 4;  // as the field's matching
+    if (std::abs(test::wrap_angle(there - here - cut.rotation[h] * kQuarter)) > limit + 1e-9) bad_chart = h;
   }
   EXPECT_EQ(bad_inverse, -1) << "rotation[opposite] != (4 - rotation[h]) % 4";
   EXPECT_EQ(bad_off_cut, -1) << "non-zero rotation on a non-cut edge";

@@ -74,17 +74,20 @@ bool is_feature_halfedge(const TriMesh& mesh, const std::vector<char>& feature_e
   return mesh.opposite[h] < 0 || feature_edge[mesh.edge_of[h]];
 }
 
-// Direction angle (in the face frame) of a face with feature/boundary halfedges, or false.
-bool constrained_angle(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
-                       int f, double* theta) {
+// Constraint of a face next to features (angle in its own frame), see the header:
+// kAligned (one feature edge), kCornerCompromise (two or three feature edges), or free.
+enum ConstraintKind : char { kFree = 0, kAligned = 1, kCornerCompromise = 2, kSectorCompromise = 3 };
+
+ConstraintKind face_constraint(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
+                               int f, double* theta) {
   bool is_feature[3];
   int count = 0;
   for (int k = 0; k < 3; ++k) count += is_feature[k] = is_feature_halfedge(mesh, feature_edge, 3 * f + k);
-  if (count == 0) return false;
+  if (count == 0) return kFree;
   if (count == 1) {
     for (int k = 0; k < 3; ++k)
       if (is_feature[k]) *theta = fr.angle[3 * f + k];
-    return true;
+    return kAligned;
   }
   // Corner k lies between halfedge 3f+k (outgoing) and halfedge 3f+(k+2)%3 (incoming); both are
   // features there. With three features, take the corner closest to 90 degrees.
@@ -97,7 +100,48 @@ bool constrained_angle(const TriMesh& mesh, const FaceFrames& fr, const std::vec
   }
   // Outgoing edge at chart angle 45deg - beta/2, the other one at 45deg + beta/2.
   *theta = fr.angle[3 * f + best] + 0.5 * (best_angle - kQuarter);
-  return true;
+  return kCornerCompromise;
+}
+
+// Acute sectors: around a vertex, the faces between two consecutive feature/boundary edges whose
+// angles sum to beta < 45deg (over two faces or more) would otherwise map to zero quarter turns,
+// i.e. collapse. All their faces get the compromise of a two-feature face: the first edge of the
+// sector (counter-clockwise) at 45deg - beta/2 off its axis, the last at 45deg + beta/2, so the
+// sector maps to exactly one quarter turn. A face in several acute sectors takes the sharpest;
+// faces with two or three feature edges keep their own corner compromise.
+void constrain_acute_sectors(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
+                             std::vector<char>& kind, std::vector<double>& theta) {
+  std::vector<double> sharpest(mesh.num_faces(), kQuarter / 2);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const int k = static_cast<int>(fan.size());
+    int start = -1, edges = 0;
+    for (int j = 0; j < k; ++j)
+      if (is_feature_halfedge(mesh, feature_edge, fan[j])) start = start < 0 ? j : start, ++edges;
+    const bool boundary = is_boundary_vertex(mesh, v);
+    if (start < 0 || (!boundary && edges < 2)) continue;  // a sector needs two distinct edges
+    const int end = boundary ? k : start + k;
+    for (int j0 = start; j0 < end;) {
+      // Sector: faces fan[j0..j1] (cyclic), closed by the feature halfedge prev(fan[j1]).
+      int j1 = j0;
+      double beta = corner_angle(mesh, fan[j0 % k]);
+      while (!is_feature_halfedge(mesh, feature_edge, TriMesh::prev(fan[j1 % k])))
+        beta += corner_angle(mesh, fan[++j1 % k]);
+      if (j1 > j0 && beta < kQuarter / 2) {
+        double swept = 0;  // angle from the sector's first edge to fan[j]'s edge
+        for (int j = j0; j <= j1; ++j) {
+          const int h = fan[j % k], f = h / 3;
+          if (kind[f] != kCornerCompromise && beta < sharpest[f]) {
+            sharpest[f] = beta;
+            kind[f] = kSectorCompromise;
+            theta[f] = fr.angle[h] - swept + 0.5 * (beta - kQuarter);
+          }
+          swept += corner_angle(mesh, h);
+        }
+      }
+      j0 = j1 + 1;
+    }
+  }
 }
 
 // Frames of the proxy surface that defines the connection: the true face normals diffused by one
@@ -279,6 +323,35 @@ ComplexVector smallest_eigenvector(const ComplexSparse& A, const std::vector<dou
   return x;
 }
 
+// Sectors around a vertex (fan: its outgoing halfedges, counter-clockwise) between consecutive
+// feature/boundary edges a (outgoing, first) and b (incoming, last) map to
+// n = (rho(a) + angles + residual rotations inside - rho(b)) / 90deg quarter turns, an exact
+// integer. Counts those with n < 1 and one-face sectors with n != 1 (a triangle corner between
+// two isolines must be 90deg): the parametrization has to collapse there.
+int count_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge, const std::vector<int>& fan,
+                            bool boundary, const std::vector<double>& eps, const std::vector<double>& rho) {
+  const int k = static_cast<int>(fan.size());
+  int start = -1;
+  for (int j = 0; j < k && start < 0; ++j)
+    if (is_feature_halfedge(mesh, feature_edge, fan[j])) start = j;
+  if (start < 0) return 0;
+  int collapsed = 0;
+  const int end = boundary ? k : start + k;
+  for (int j0 = start; j0 < end;) {
+    int j1 = j0;
+    double swept = rho[fan[j0 % k]] + corner_angle(mesh, fan[j0 % k]);
+    while (!is_feature_halfedge(mesh, feature_edge, TriMesh::prev(fan[j1 % k]))) {
+      swept += eps[TriMesh::prev(fan[j1 % k])];
+      swept += corner_angle(mesh, fan[++j1 % k]);
+    }
+    swept -= rho[TriMesh::prev(fan[j1 % k])];
+    const long n = std::lround(swept / kQuarter);
+    if (n < 1 || (j1 == j0 && n != 1)) ++collapsed;
+    j0 = j1 + 1;
+  }
+  return collapsed;
+}
+
 }  // namespace
 
 Vec3 rotate_in_face(const TriMesh& mesh, int f, const Vec3& d, int k) {
@@ -331,9 +404,10 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
     for (int k = 0; k < 3; ++k) count += is_feature_halfedge(mesh, field.feature_edge, 3 * f + k);
     field.num_overconstrained_faces += count == 3;
   }
+  for (int f = 0; f < nf; ++f) field.constrained_face[f] = face_constraint(mesh, fr, field.feature_edge, f, &theta[f]);
+  constrain_acute_sectors(mesh, fr, field.feature_edge, field.constrained_face, theta);
   for (int f = 0; f < nf; ++f)
-    if (constrained_angle(mesh, fr, field.feature_edge, f, &theta[f])) {
-      field.constrained_face[f] = 1;
+    if (field.constrained_face[f] != kFree) {
       z_fixed[f] = std::polar(1.0, 4 * theta[f]);
       ++num_constrained;
     }
@@ -358,32 +432,35 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
   field.direction.resize(nf);
   for (int f = 0; f < nf; ++f) field.direction[f] = std::cos(theta[f]) * fr.e1[f] + std::sin(theta[f]) * fr.e2[f];
 
-  // Matchings and the residual rotation eps[h] in [-45deg, 45deg] left after the quarter turns:
-  // the edge's chart angle on the far side minus (its chart angle here + matching * 90deg).
-  field.matching.assign(nh, 0);
-  std::vector<double> eps(nh, 0.0);
-  for (int e = 0; e < ne; ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0) continue;
-    const double transported = theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI;
-    const int q = nearest_quarter(wrap_angle(transported - theta[o / 3]), &eps[h]);
-    eps[o] = -eps[h];
-    field.matching[h] = static_cast<int8_t>(mod4(q));
-    field.matching[o] = static_cast<int8_t>(mod4(-q));
-  }
-
-  // Isoline sectors of feature/boundary halfedges; rho = chart angle - sector * 90deg.
+  // Isoline sectors of feature/boundary halfedges, each from its own face (nearest axis);
+  // rho = chart angle - sector * 90deg, in [-45deg, 45deg].
   field.edge_sector.assign(nh, -1);
   std::vector<double> rho(nh, 0.0);
   for (int h = 0; h < nh; ++h)
     if (is_feature_halfedge(mesh, field.feature_edge, h))
       field.edge_sector[h] =
           static_cast<int8_t>(mod4(nearest_quarter(wrap_angle(fr.angle[h] - theta[h / 3]), &rho[h])));
+
+  // Matchings and the residual rotation eps[h] left after the quarter turns (the edge's chart
+  // angle on the far side minus its chart angle here minus matching * 90deg). Ordinary edges:
+  // nearest quarter turn, |eps| <= 45deg. Feature edges: the quarter turn that keeps both sides'
+  // own sectors, q(o) = q(h) + r + 2, so |eps| = |rho(o) - rho(h)| <= 90deg.
+  field.matching.assign(nh, 0);
+  std::vector<double> eps(nh, 0.0);
   for (int e = 0; e < ne; ++e) {
-    int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0 || !field.feature_edge[e]) continue;
-    if (std::abs(rho[o]) < std::abs(rho[h])) std::swap(h, o);  // h: the better aligned side
-    field.edge_sector[o] = static_cast<int8_t>(mod4(field.edge_sector[h] + field.matching[h] + 2));
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    const double mismatch = wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]);
+    int q;
+    if (field.feature_edge[e]) {
+      q = field.edge_sector[o] - field.edge_sector[h] - 2;
+      eps[h] = wrap_angle(mismatch - q * kQuarter);
+    } else {
+      q = nearest_quarter(mismatch, &eps[h]);
+    }
+    eps[o] = -eps[h];
+    field.matching[h] = static_cast<int8_t>(mod4(q));
+    field.matching[o] = static_cast<int8_t>(mod4(-q));
   }
 
   // Index = (angle defect - field rotation relative to parallel transport) / 90deg; on the
@@ -400,6 +477,7 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
     }
     if (boundary) turning += rho[TriMesh::prev(fan.back())] - rho[fan.front()];
     field.vertex_index[v] = static_cast<int>(std::lround(turning / kQuarter));
+    field.num_collapsed_sectors += count_collapsed_sectors(mesh, field.feature_edge, fan, boundary, eps, rho);
   }
   for (int v = 0; v < nv; ++v) {
     field.index_sum += field.vertex_index[v];

@@ -19,7 +19,13 @@
 //     isolines. The cross is the symmetric compromise: each edge is off its axis by
 //     |45deg - beta/2| (exact alignment with both when beta = 90deg);
 //   - three feature edges: the pair whose corner angle is closest to 90deg is handled as above
-//     (lowest corner on ties); the third edge is not aligned (no triangle has three isolines).
+//     (lowest corner on ties); the third edge is not aligned (no triangle has three isolines:
+//     counted in num_overconstrained_faces; splitting such faces is the remedy);
+//   - acute sectors: around a vertex, the faces between two consecutive feature/boundary edges
+//     whose angles sum to beta < 45deg (two faces or more) would map to zero quarter turns; all
+//     of them get the same symmetric compromise (first edge 45deg - beta/2 off its axis, last
+//     edge 45deg + beta/2), so the sector maps to one quarter turn. A face in several acute
+//     sectors takes the sharpest; the rules above take precedence.
 //
 // Charts: face f's chart has +u = direction[f] and +v = n_f x direction[f]. A tangent vector at
 // angle phi in the chart has coordinates (cos phi, sin phi).
@@ -44,8 +50,11 @@ struct CrossField {
                                       // Parametrization::rotation (chart of face(h) -> chart of the
                                       // opposite face when each face's +u axis is direction[f]):
                                       // the edge vector in the opposite chart is R^r times the edge
-                                      // vector in face(h)'s chart up to the smallest possible
-                                      // rotation (at most 45deg). 0 on boundary halfedges;
+                                      // vector in face(h)'s chart up to a residual rotation:
+                                      // across ordinary edges r is the nearest quarter turn
+                                      // (residual <= 45deg); across feature edges r keeps both
+                                      // sides' isoline sectors (see edge_sector; residual <=
+                                      // 90deg). 0 on boundary halfedges;
                                       // matching[opposite] = (4 - matching[h]) % 4.
   std::vector<int> vertex_index;      // #V: singularity index in quarter turns (4 - valence of the
                                       // quad-mesh vertex: +1 at a cube corner) = (angle defect -
@@ -58,17 +67,26 @@ struct CrossField {
                                       // index = sum of the matchings around them, mod 4.
   std::vector<char> feature_edge;     // #E: feature edges in use (caller + dihedral); boundaries
                                       // are features too but are not flagged here
-  std::vector<char> constrained_face; // #F: faces whose direction was fixed by a feature/boundary
+  std::vector<char> constrained_face; // #F: how the direction was fixed: 0 free (smoothest),
+                                      // 1 aligned to its one feature edge, 2 compromise of its
+                                      // two (three) feature edges, 3 compromise of an acute
+                                      // sector at one of its vertices (see above)
   std::vector<int8_t> edge_sector;    // 3#F: for halfedges of feature and boundary edges, the
                                       // isoline sector q: the halfedge vector runs along R^q(+u)
                                       // of face(h)'s chart (q even: the edge runs along u, so v
-                                      // is constant on it; q odd: u is constant). Consistent
+                                      // is constant on it; q odd: u is constant); the nearest
+                                      // axis in face(h) (off by at most 45deg). Consistent
                                       // across interior feature edges:
                                       //   q(opposite) = (q(h) + matching[h] + 2) % 4.
                                       // -1 on all other halfedges.
   int num_overconstrained_faces = 0;  // faces with three feature/boundary edges: no triangle can
                                       // have all three on isolines (the seamless map must give
                                       // one up or the face must be split)
+  int num_collapsed_sectors = 0;      // sectors between consecutive feature/boundary edges around
+                                      // a vertex that map to no quarter turn (or, one face wide,
+                                      // not to exactly one): the seamless map must degenerate
+                                      // there. Only around over-constrained faces on the shared
+                                      // meshes (plus 2 on cow.obj at 40deg).
   int num_singularities = 0;          // vertices with vertex_index != 0
   int index_sum = 0;                  // sum of vertex_index (quarter turns) = 4 * chi
   int euler_characteristic = 0;       // of the mesh

@@ -134,7 +134,8 @@ void Session::run_field_stages(Progress& progress) {
   // Report: totals plus one entry per component. index_sum is in full index units (quarter
   // turns / 4) so that it reads as the Euler characteristic.
   Json per_component = Json::array();
-  int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0, overconstrained = 0;
+  int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0, overconstrained = 0,
+      collapsed = 0;
   for (const ComponentState& state : components_) {
     const CrossField& field = *state.field;
     int features = 0;
@@ -145,6 +146,7 @@ void Session::run_field_stages(Progress& progress) {
                              {"euler_characteristic", field.euler_characteristic},
                              {"feature_edges", features},
                              {"overconstrained_faces", field.num_overconstrained_faces},
+                             {"collapsed_sectors", field.num_collapsed_sectors},
                              {"cut_edges", state.cut->num_cut_edges}});
     singularities += field.num_singularities;
     index_quarters += field.index_sum;
@@ -152,12 +154,14 @@ void Session::run_field_stages(Progress& progress) {
     feature_edges += features;
     cut_edges += state.cut->num_cut_edges;
     overconstrained += field.num_overconstrained_faces;
+    collapsed += field.num_collapsed_sectors;
   }
   report_["field"] = {{"singularities", singularities},
                       {"index_sum", index_quarters / 4},
                       {"euler_characteristic", euler},
                       {"feature_edges", feature_edges},
                       {"overconstrained_faces", overconstrained},
+                      {"collapsed_sectors", collapsed},
                       {"cut_edges", cut_edges},
                       {"components", std::move(per_component)}};
 }
