@@ -314,12 +314,11 @@ TEST(CrossField, SmoothTorusAndPlanarGrid) {
   }
 }
 
-TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {
-  // A flat disc: centre, two rings of 24 vertices; feature edges along the spokes to ring
-  // vertices 0 and 2 enclose a 30deg sector of two faces.
+// A flat disc: centre vertex 0, then two rings of n vertices (radius 1 and 2; the outer ring
+// is the boundary). No interior edge joins two boundary vertices.
+TriMesh make_ring_disc(int n) {
   std::vector<Vec3> points{{0, 0, 0}};
   std::vector<std::array<int, 3>> faces;
-  const int n = 24;
   for (int ring = 1; ring <= 2; ++ring)
     for (int i = 0; i < n; ++i)
       points.push_back({ring * std::cos(2 * M_PI * i / n), ring * std::sin(2 * M_PI * i / n), 0});
@@ -330,7 +329,13 @@ TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {
     faces.push_back({r1(i), r2(i), r2(i + 1)});
     faces.push_back({r1(i), r2(i + 1), r1(i + 1)});
   }
-  const TriMesh disc = test::make_triangles(points, faces);
+  return test::make_triangles(points, faces);
+}
+
+TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {
+  // Feature edges along the spokes to ring vertices 0 and 2 enclose a 30deg sector of two faces.
+  const TriMesh disc = make_ring_disc(24);
+  auto r1 = [](int i) { return 1 + i; };
   CrossFieldOptions options;
   options.feature_edges.assign(disc.num_edges(), 0);
   for (int h = 0; h < disc.num_halfedges(); ++h)
@@ -346,13 +351,42 @@ TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {
   EXPECT_NEAR(std::abs(std::remainder(a, kQuarter)), M_PI / 6, 1e-9);
 }
 
+TEST(CrossField, FlatPillowWithFoldedRim) {
+  // Two copies of a flat disc glued along their boundary, the lower one reversed: a closed
+  // sphere of zero volume whose rim edges are 180-degree folds.
+  const TriMesh top = make_ring_disc(12);
+  std::vector<Vec3> points;
+  for (int v = 0; v < top.num_vertices(); ++v) points.push_back(top.position(v));
+  std::vector<int> lower(top.num_vertices());
+  for (int v = 0; v < top.num_vertices(); ++v) {
+    lower[v] = v;
+    if (!is_boundary_vertex(top, v)) lower[v] = static_cast<int>(points.size()), points.push_back(top.position(v));
+  }
+  std::vector<std::array<int, 3>> faces;
+  for (int f = 0; f < top.num_faces(); ++f) {
+    faces.push_back({top.F(f, 0), top.F(f, 1), top.F(f, 2)});
+    faces.push_back({lower[top.F(f, 0)], lower[top.F(f, 2)], lower[top.F(f, 1)]});
+  }
+  const TriMesh pillow = test::make_triangles(points, faces);
+  for (double sharp : {-1.0, 40.0}) {
+    CrossFieldOptions options;
+    options.sharp_angle_deg = sharp;
+    Progress progress;
+    const CrossField field = compute_cross_field(pillow, options, progress);
+    check_field(pillow, field, sharp);
+    EXPECT_EQ(field.index_sum, 8);
+  }
+}
+
 TEST(CrossField, TinyComponents) {
   // One triangle (three boundary edges), two triangles, an acute and an obtuse triangle.
   const std::vector<TriMesh> meshes = {
       test::make_triangles({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}),
       test::make_triangles({{0, 0, 0}, {1, 0, 0}, {0.5, 0.866, 0}}, {{0, 1, 2}}),
       test::make_triangles({{0, 0, 0}, {1, 0, 0}, {3, 0.2, 0}}, {{0, 1, 2}}),
-      test::make_triangles({{0, 0, 0}, {1, 0, 0}, {1, 1, 0.3}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}})};
+      test::make_triangles({{0, 0, 0}, {1, 0, 0}, {1, 1, 0.3}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}),
+      // Folded flat onto itself: the two normals are opposite (dihedral angle 180 degrees).
+      test::make_triangles({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 1, 0}}, {{0, 1, 2}, {1, 0, 3}})};
   for (size_t i = 0; i < meshes.size(); ++i) {
     SCOPED_TRACE("mesh " + std::to_string(i));
     for (double sharp : {-1.0, 10.0}) {

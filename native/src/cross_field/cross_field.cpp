@@ -144,6 +144,16 @@ void constrain_acute_sectors(const TriMesh& mesh, const FaceFrames& fr, const st
   }
 }
 
+// Rotates v by the minimal rotation that takes unit vector a to unit vector b. For opposite
+// vectors (a fold of 180 degrees) it turns by 180 degrees about `axis` (a unit vector orthogonal
+// to both, e.g. the shared edge).
+Vec3 rotate_between(const Vec3& a, const Vec3& b, const Vec3& v, const Vec3& axis = Vec3::Zero()) {
+  const Vec3 k = a.cross(b);
+  const double c = a.dot(b);
+  if (1 + c > 1e-12) return v * c + k.cross(v) + k * (k.dot(v) / (1 + c));
+  return 2 * axis.dot(v) * axis - v;
+}
+
 // Frames of the proxy surface that defines the connection: the true face normals diffused by one
 // implicit heat step (M + t L) n = M n0 with t = r^2 / 2, r = kSmoothingRadius * bounding-box
 // diagonal (L: face-adjacency Laplacian with the field's edge weights, cut at feature and
@@ -194,24 +204,17 @@ ProxyFrames proxy_frames(const TriMesh& mesh, const FaceFrames& fr, const std::v
   for (int f = 0; f < nf; ++f) {
     // Where diffusion tilted a normal by 90 degrees or more (thin folds) keep the true one.
     if (!(p.normal[f].dot(fr.normal[f]) > 0)) p.normal[f] = fr.normal[f];
-    p.e1[f] = (fr.e1[f] - fr.e1[f].dot(p.normal[f]) * p.normal[f]).normalized();
+    p.e1[f] = rotate_between(fr.normal[f], p.normal[f], fr.e1[f]);
     p.e2[f] = p.normal[f].cross(p.e1[f]);
   }
   return p;
 }
 
-// Rotates v by the minimal rotation that takes unit vector a to unit vector b (a != -b).
-Vec3 rotate_between(const Vec3& a, const Vec3& b, const Vec3& v) {
-  const Vec3 k = a.cross(b);
-  const double c = a.dot(b);
-  return v * c + k.cross(v) + k * (k.dot(v) / (1 + c));
-}
-
 // Angle in frame (e1, e2) of the unit tangent obtained by turning angle t of frame (from_e1,
 // from_e2, from_n) onto the plane with normal to_n.
 double transfer_angle(double t, const Vec3& from_e1, const Vec3& from_e2, const Vec3& from_n, const Vec3& to_n,
-                      const Vec3& e1, const Vec3& e2) {
-  const Vec3 d = rotate_between(from_n, to_n, std::cos(t) * from_e1 + std::sin(t) * from_e2);
+                      const Vec3& e1, const Vec3& e2, const Vec3& fold_axis = Vec3::Zero()) {
+  const Vec3 d = rotate_between(from_n, to_n, std::cos(t) * from_e1 + std::sin(t) * from_e2, fold_axis);
   return std::atan2(d.dot(e2), d.dot(e1));
 }
 
@@ -227,7 +230,7 @@ ComplexSparse smoothness_matrix(const TriMesh& mesh, const FaceFrames& fr, const
     if (o < 0) continue;
     const int f = h / 3, g = o / 3;
     const double transport = transfer_angle(0, proxy.e1[f], proxy.e2[f], proxy.normal[f], proxy.normal[g],
-                                            proxy.e1[g], proxy.e2[g]);
+                                            proxy.e1[g], proxy.e2[g], mesh.edge_vector(h).normalized());
     const Complex rho = std::polar(1.0, 4 * transport);
     const double w = 1.5 * mesh.edge_vector(h).squaredNorm() / (fr.area[f] + fr.area[g]);
     triplets.emplace_back(f, f, w);
