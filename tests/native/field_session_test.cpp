@@ -2,6 +2,7 @@
 // the first stage that does not exist yet.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <string>
 
 #include "core/error.h"
@@ -108,6 +109,24 @@ TEST(FieldSession, CachesFieldUntilFeaturesChange) {
   Progress p4;
   EXPECT_EQ(run_remesh(session, p4), ErrorCode::NotBuilt);
   EXPECT_GE(session.report()["field"]["feature_edges"].get<int>(), 20);
+}
+
+TEST(FieldSession, CancelInsideTheFieldStagesThenRunAgain) {
+  Session session(read_mesh_file(test::mesh_path("bunny.off")));
+  for (const char* stage : {"cross_field", "cut_graph"}) {
+    std::atomic<bool> cancel{false};
+    Progress progress(
+        [&](const std::string& s, double fraction) {
+          if (s == stage && fraction > 0) cancel = true;
+        },
+        &cancel);
+    EXPECT_EQ(run_remesh(session, progress), ErrorCode::Cancelled) << stage;
+    EXPECT_EQ(session.report()["status"], "error");
+  }
+  // Nothing half-done is kept: the next run completes both stages.
+  Progress progress;
+  EXPECT_EQ(run_remesh(session, progress), ErrorCode::NotBuilt);
+  EXPECT_EQ(session.report()["field"]["index_sum"], 2);
 }
 
 }  // namespace
