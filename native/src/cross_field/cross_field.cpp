@@ -382,6 +382,24 @@ double chart_angle(const TriMesh& mesh, int h, const Vec3& u_axis) {
   return std::atan2(v.dot(n.cross(u_axis)), v.dot(u_axis));
 }
 
+std::vector<char> detect_feature_edges(const TriMesh& mesh, const std::vector<char>& caller_features,
+                                       double sharp_angle_deg) {
+  const int ne = mesh.num_edges();
+  std::vector<char> feature(ne, 0);
+  const double sharp = sharp_angle_deg * M_PI / 180;
+  for (int e = 0; e < ne; ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    if (!caller_features.empty() && caller_features[e]) feature[e] = 1;
+    if (sharp_angle_deg >= 0) {
+      const Vec3 a = mesh.face_normal_unnormalized(h / 3).normalized();
+      const Vec3 b = mesh.face_normal_unnormalized(o / 3).normalized();
+      if (std::atan2(a.cross(b).norm(), a.dot(b)) > sharp) feature[e] = 1;
+    }
+  }
+  return feature;
+}
+
 CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& options, Progress& progress) {
   const int nf = mesh.num_faces(), ne = mesh.num_edges(), nh = mesh.num_halfedges(), nv = mesh.num_vertices();
   if (nf == 0) throw Error(ErrorCode::InvalidMesh, "cross field: the mesh has no faces");
@@ -392,18 +410,7 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
   CrossField field;
   const FaceFrames fr = compute_frames(mesh);
 
-  // Features: caller's edges plus dihedral angle; boundary edges are implicit features.
-  field.feature_edge.assign(ne, 0);
-  const double sharp = options.sharp_angle_deg * M_PI / 180;
-  for (int e = 0; e < ne; ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0) continue;
-    if (!options.feature_edges.empty() && options.feature_edges[e]) field.feature_edge[e] = 1;
-    if (options.sharp_angle_deg >= 0) {
-      const Vec3 &a = fr.normal[h / 3], &b = fr.normal[o / 3];
-      if (std::atan2(a.cross(b).norm(), a.dot(b)) > sharp) field.feature_edge[e] = 1;
-    }
-  }
+  field.feature_edge = detect_feature_edges(mesh, options.feature_edges, options.sharp_angle_deg);
 
   // Constrained faces and the power field.
   std::vector<double> theta(nf, 0.0);

@@ -92,6 +92,11 @@ struct CrossField {
   int euler_characteristic = 0;       // of the mesh
 };
 
+// Feature edges (#E flags): the caller's plus those whose dihedral angle exceeds sharp_angle_deg
+// (off when < 0). Boundary edges are implicit features and are not flagged.
+std::vector<char> detect_feature_edges(const TriMesh& mesh, const std::vector<char>& caller_features,
+                                       double sharp_angle_deg);
+
 // mesh: one connected, oriented, manifold component (connectivity built).
 // Throws Error(InvalidArgument) if options.feature_edges is neither empty nor #E long,
 // Error(InvalidMesh) on a face without a normal, Error(StageFailed) if the solver fails.

@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "pipeline/split_faces.h"
 
 namespace qgp {
 
@@ -87,18 +88,28 @@ void Session::prepare_components() {
   int unmatched = 0;
   const std::vector<char> features = map_input_edges(*intake_, options_.feature_edges, &unmatched);
   components_.resize(intake_->components.size());
+  int split = 0;
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
     state.mesh = extract_component(*intake_, static_cast<int>(c), &state.vertex_map, &state.face_map);
-    state.feature_edges.assign(state.mesh.num_edges(), 0);
+    std::vector<char> caller(state.mesh.num_edges(), 0);
     // Component edges map to intake edges through their halfedges' faces.
     for (int h = 0; h < state.mesh.num_halfedges(); ++h) {
       const int global_h = 3 * state.face_map[h / 3] + h % 3;
-      if (features[intake_->mesh.edge_of[global_h]]) state.feature_edges[state.mesh.edge_of[h]] = 1;
+      if (features[intake_->mesh.edge_of[global_h]]) caller[state.mesh.edge_of[h]] = 1;
     }
+    state.feature_edges = detect_feature_edges(state.mesh, caller, options_.sharp_angle_deg);
+    split += split_overconstrained_faces(state.mesh, state.feature_edges, state.vertex_map, state.face_map);
   }
-  if (unmatched > 0)
-    report_["input"]["warnings"].push_back(std::to_string(unmatched) +
+  split_faces_ = split;
+  unmatched_features_ = unmatched;
+}
+
+void Session::report_component_preparation() {
+  if (split_faces_ > 0)
+    report_["input"]["repairs"].push_back({{"kind", "split_overconstrained_faces"}, {"count", split_faces_}});
+  if (unmatched_features_ > 0)
+    report_["input"]["warnings"].push_back(std::to_string(unmatched_features_) +
                                            " feature edge(s) are not edges of the repaired mesh and were ignored");
 }
 
@@ -119,7 +130,7 @@ void Session::run_field_stages(Progress& progress) {
     set_share(c);
     CrossFieldOptions field_options;
     field_options.feature_edges = state.feature_edges;
-    field_options.sharp_angle_deg = options_.sharp_angle_deg;
+    field_options.sharp_angle_deg = -1;  // dihedral features are already in feature_edges
     state.field = compute_cross_field(state.mesh, field_options, progress);
     state.cut.reset();
   }
@@ -173,6 +184,7 @@ void Session::run_field_stages(Progress& progress) {
 void Session::run_remesh_stages(Job job, Progress& progress) {
   (void)job;
   prepare_components();
+  report_component_preparation();
   run_field_stages(progress);
   progress.begin_stage("seamless_map");
   throw Error(ErrorCode::NotBuilt, "stage 'seamless_map' is not built yet; no output was written");

@@ -23,7 +23,7 @@ struct ComponentState {
   TriMesh mesh;                     // the component as its own mesh
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
   std::vector<int> face_map;        // component face -> intake mesh face
-  std::vector<char> feature_edges;  // #E of `mesh`: caller's feature edges
+  std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
   std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
   std::optional<CutGraph> cut;      // stage 1b
 };
@@ -61,6 +61,7 @@ class Session {
  private:
   void run_intake_stage(Progress& progress);
   void prepare_components();
+  void report_component_preparation();
   void run_remesh_stages(Job job, Progress& progress);
   void run_field_stages(Progress& progress);
 
@@ -68,6 +69,7 @@ class Session {
   RemeshOptions options_;
   std::unique_ptr<IntakeResult> intake_;
   std::vector<ComponentState> components_;
+  int split_faces_ = 0, unmatched_features_ = 0;
   Json report_;
   std::unique_ptr<QuadMesh> quads_;
   std::vector<int> quad_source_face_;
