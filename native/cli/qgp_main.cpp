@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/json.h"
 #include "intake/read_mesh_file.h"
+#include "mesh_writers.h"
 #include "pipeline/session.h"
 
 namespace {
@@ -134,6 +135,54 @@ int exit_code_for(qgp::ErrorCode code) {
   }
 }
 
+// --uv-out: the repaired input mesh (faces split by the pipeline included) with the seamless
+// map as per-corner texture coordinates, 1 uv unit = the target edge length.
+bool has_seamless_map(const qgp::Session& session) {
+  bool complete = session.intake() != nullptr && !session.components().empty();
+  for (const auto& c : session.components()) complete = complete && c.seamless.has_value();
+  return complete;
+}
+
+// Returns false (after a message) if the file cannot be written.
+bool write_uv_output(const std::string& path, const qgp::Session& session) {
+  const auto& components = session.components();
+  const qgp::IntakeResult* intake = session.intake();
+  // Intake vertices keep their indices; vertices the pipeline added (split centroids) follow.
+  qgp::TriMesh out;
+  int num_vertices = intake->mesh.num_vertices(), num_faces = 0;
+  for (const auto& c : components) {
+    for (int v : c.vertex_map) num_vertices += v < 0;
+    num_faces += c.mesh.num_faces();
+  }
+  out.V.resize(num_vertices, 3);
+  out.V.topRows(intake->mesh.num_vertices()) = intake->mesh.V;
+  out.F.resize(num_faces, 3);
+  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> uv(3 * num_faces, 2);
+  int next_vertex = intake->mesh.num_vertices(), face = 0;
+  for (const auto& c : components) {
+    std::vector<int> id(c.mesh.num_vertices());
+    for (int v = 0; v < c.mesh.num_vertices(); ++v) {
+      id[v] = c.vertex_map[v] >= 0 ? c.vertex_map[v] : next_vertex++;
+      out.V.row(id[v]) = c.mesh.V.row(v);
+    }
+    for (int f = 0; f < c.mesh.num_faces(); ++f, ++face)
+      for (int k = 0; k < 3; ++k) {
+        out.F(face, k) = id[c.mesh.F(f, k)];
+        uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);
+      }
+  }
+  std::ostringstream header;
+  header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
+         << session.target_edge_length() << " model units";
+  try {
+    qgp::cli::write_obj(path, out, &uv, header.str());
+  } catch (const std::exception& e) {
+    std::cerr << "qgp: " << e.what() << "\n";
+    return false;
+  }
+  return true;
+}
+
 int run(const CommandLine& cl) {
   qgp::Json report;
   std::unique_ptr<qgp::Session> session;
@@ -151,14 +200,21 @@ int run(const CommandLine& cl) {
     report["error"] = {{"code", qgp::error_code_name(e.code())}, {"message", e.what()}};
     report["file"] = cl.input;
     if (cl.command == "info") print_intake_summary(report);
+    // The seamless map exists even while later stages are not built: --uv-out still gets it.
+    bool uv_written = true;
+    if (!cl.uv_out.empty()) {
+      if (session && has_seamless_map(*session)) uv_written = write_uv_output(cl.uv_out, *session);
+      else std::cerr << "qgp: no seamless map was computed; '" << cl.uv_out << "' not written\n";
+    }
     write_report(cl.report, report);
     std::cerr << "qgp: " << e.what() << "\n";
-    return exit_code_for(e.code());
+    return uv_written ? exit_code_for(e.code()) : 1;
   }
   report["file"] = cl.input;
   if (cl.command == "info") print_intake_summary(report);
+  const bool uv_written = cl.uv_out.empty() || !has_seamless_map(*session) || write_uv_output(cl.uv_out, *session);
   write_report(cl.report, report);
-  return 0;
+  return uv_written ? 0 : 1;
 }
 
 }  // namespace

@@ -143,6 +143,7 @@ void Session::run_field_stages(Progress& progress) {
     if (state.cut) continue;
     set_share(c);
     state.cut = compute_cut_graph(state.mesh, *state.field, progress);
+    state.seamless.reset();
   }
   report_["timings_s"]["cut_graph"] = cut_timer.seconds();
 
@@ -186,8 +187,68 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   prepare_components();
   report_component_preparation();
   run_field_stages(progress);
+  run_seamless_stage(progress);
+  progress.begin_stage("tmesh");
+  throw Error(ErrorCode::NotBuilt, "stage 'tmesh' is not built yet; no output was written");
+}
+
+void Session::run_seamless_stage(Progress& progress) {
+  Timer timer;
   progress.begin_stage("seamless_map");
-  throw Error(ErrorCode::NotBuilt, "stage 'seamless_map' is not built yet; no output was written");
+  const double edge_length = target_edge_length();
+  double faces = 0, done = 0;
+  for (const ComponentState& state : components_) faces += state.mesh.num_faces();
+  for (ComponentState& state : components_) {
+    progress.set_range(done / faces, (done + state.mesh.num_faces()) / faces);
+    done += state.mesh.num_faces();
+    if (state.seamless && state.seamless_edge_length != edge_length) {
+      // Only the density changed: the map scales with 1 / edge length.
+      const double s = state.seamless_edge_length / edge_length;
+      state.seamless->param.uv *= s;
+      state.seamless->stats.max_transition_residual =
+          max_transition_residual(state.mesh, state.seamless->param);
+      state.seamless->stats.energy *= s * s;
+      state.seamless_edge_length = edge_length;
+    }
+    if (state.seamless) continue;
+    SeamlessMapOptions options;
+    options.edge_length = edge_length;
+    state.seamless = compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress);
+    state.seamless_edge_length = edge_length;
+  }
+  report_["timings_s"]["seamless_map"] = timer.seconds();
+
+  Json per_component = Json::array();
+  int flipped = 0, degenerate = 0, iterations = 0;
+  double residual = 0, energy = 0;
+  for (const ComponentState& state : components_) {
+    const SeamlessMapStats& s = state.seamless->stats;
+    per_component.push_back({{"flipped_triangles", s.flipped_triangles},
+                             {"degenerate_triangles", s.degenerate_triangles},
+                             {"max_transition_residual", s.max_transition_residual},
+                             {"energy", s.energy},
+                             {"ipopt_iterations", s.ipopt_iterations},
+                             {"flipped_before_ipopt", s.flipped_before_ipopt},
+                             {"isoline_edges", s.isoline_edges},
+                             {"dropped_isolines", s.dropped_isolines},
+                             {"repair_rounds", s.repair_rounds},
+                             {"min_area_ratio", s.min_area_ratio}});
+    flipped += s.flipped_triangles;
+    degenerate += s.degenerate_triangles;
+    iterations += s.ipopt_iterations;
+    residual = std::max(residual, s.max_transition_residual);
+    energy += s.energy;
+  }
+  report_["seamless"] = {{"flipped_triangles", flipped},
+                         {"degenerate_triangles", degenerate},
+                         {"max_transition_residual", residual},
+                         {"energy", energy},
+                         {"ipopt_iterations", iterations},
+                         {"edge_length", edge_length},
+                         {"components", std::move(per_component)}};
+  if (flipped + degenerate > 0)
+    report_["seamless"]["warnings"].push_back(std::to_string(flipped) + " flipped and " + std::to_string(degenerate) +
+                                              " degenerate triangle(s) remain in the seamless map");
 }
 
 }  // namespace qgp

@@ -13,6 +13,7 @@
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
+#include "seamless_map/seamless_map.h"
 
 namespace qgp {
 
@@ -26,6 +27,8 @@ struct ComponentState {
   std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
   std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
   std::optional<CutGraph> cut;      // stage 1b
+  std::optional<SeamlessMap> seamless;  // stage 1c, for seamless_edge_length; a new target edge
+  double seamless_edge_length = 0;      // length rescales it (the map is scale-equivariant)
 };
 
 class Session {
@@ -64,6 +67,7 @@ class Session {
   void report_component_preparation();
   void run_remesh_stages(Job job, Progress& progress);
   void run_field_stages(Progress& progress);
+  void run_seamless_stage(Progress& progress);
 
   PolygonSoup input_;
   RemeshOptions options_;

@@ -762,24 +762,47 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
   const bool repair = options.regularity != RegularityMode::Off &&
                       (options.regularity == RegularityMode::AllFaces || current.bad() > 0);
   if (repair) {
-    int rings = std::max(0, options.ring_size);
+    // Per-face ring count: starts at ring_size and doubles (up to max_ring_size) each round the
+    // face is still bad, so that only stubborn clusters get large regions.
+    const int first_rings = std::max(0, options.ring_size);
+    const int max_rings = std::max(options.max_ring_size, first_rings);
+    std::vector<int> rings(nf, 0);
+    auto grow_region = [&]() {
+      region.assign(nf, 0);
+      std::vector<int> levels;
+      for (int f = 0; f < nf; ++f)
+        if (is_bad(current.state[f])) levels.push_back(rings[f]);
+      std::sort(levels.begin(), levels.end());
+      levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+      for (int level : levels) {
+        std::vector<char> seed(nf, 0);
+        for (int f = 0; f < nf; ++f) seed[f] = is_bad(current.state[f]) && rings[f] == level;
+        dilate(seed, level);
+        for (int f = 0; f < nf; ++f) region[f] = region[f] || seed[f];
+      }
+    };
     const int rounds = std::max(1, options.max_repair_rounds);
+    for (int f = 0; f < nf; ++f)
+      if (is_bad(current.state[f])) rings[f] = first_rings;
     if (options.regularity == RegularityMode::AllFaces) {
       region.assign(nf, 1);
       active.assign(nf, 1);
     } else {
-      add_bad(current, region, rings, nullptr);
+      grow_region();
       add_bad(current, active, 1, nullptr);
     }
     std::vector<char> touched(nf, 0);  // faces that were bad at some point
     for (int f = 0; f < nf; ++f) touched[f] = is_bad(current.state[f]);
-    int rejected = 0;
+    int rejected = 0, best_round = -1;
+    Census best = current;  // the best pose seen (fewest bad faces, then least depth)
+    Eigen::VectorXd best_z = z;
     for (int round = 0; round < rounds; ++round) {
       ++st.repair_rounds;
       QPResult::Status status;
       const double t0 = 0.3 + 0.5 * round / rounds;
       // The strategies take turns (a rejected round leaves the pose unchanged).
-      const int strategy = round % 4;
+      static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
+      const int strategy = kOrder[round % 4];
       const Eigen::VectorXd y = solve_region(region, active, z, current, strategy, pb + span * t0,
                                              pb + span * (t0 + 0.5 / rounds), &status);
       Census next = census(y);
@@ -787,32 +810,45 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
       for (int f = 0; f < nf && !escaped; ++f) escaped = is_bad(next.state[f]) && !active[f];
       if (escaped) {
         // Unconstrained faces went bad: they are constrained from now on. The new pose is kept
-        // only if it is better anyway (then the region moves to what is still bad).
-        for (int f = 0; f < nf; ++f) touched[f] = touched[f] || (is_bad(next.state[f]) && !active[f]);
+        // only if it is better anyway.
+        for (int f = 0; f < nf; ++f)
+          if (is_bad(next.state[f]) && !active[f]) {
+            touched[f] = 1;
+            if (rings[f] == 0) rings[f] = first_rings;
+          }
         add_bad(next, active, 1, &active);
         if (!(next.bad() < current.bad() && next.depth < current.depth)) {
-          add_bad(next, region, rings, nullptr);
+          add_bad(next, region, first_rings, nullptr);
           continue;
         }
       }
-      // Keep the new pose when it has fewer bad faces or they are less bad; grow the region.
-      if (next.bad() < current.bad() || next.depth < current.depth) {
+      // Keep the new pose when it has fewer bad faces or they are less bad.
+      const bool accepted = next.bad() < current.bad() || next.depth < current.depth;
+      if (accepted) {
         z = y;
         current = std::move(next);
         rejected = 0;
+        if (current.bad() < best.bad() || (current.bad() == best.bad() && current.depth < best.depth)) {
+          best = current;
+          best_z = z;
+          best_round = round;
+        }
       } else if (++rejected >= 4) {
         break;  // no strategy makes progress: a fixed point
       }
       if (current.bad() == 0) break;
-      // Next region: wider rings around what is still bad (faces fixed earlier stay constrained).
-      rings = std::min(std::max(1, 2 * rings), std::max(options.max_ring_size, options.ring_size));
-      if (options.regularity != RegularityMode::AllFaces) {
-        region.assign(nf, 0);
-        add_bad(current, region, rings, nullptr);
-      }
+      if (round - best_round >= options.stagnation_rounds) break;  // no new best for a while
+      // Faces still bad get wider rings; faces fixed earlier stay constrained.
+      for (int f = 0; f < nf; ++f)
+        if (is_bad(current.state[f])) {
+          rings[f] = rings[f] == 0 ? first_rings : std::min(std::max(1, 2 * rings[f]), max_rings);
+          touched[f] = 1;
+        }
+      if (options.regularity != RegularityMode::AllFaces) grow_region();
       add_bad(current, active, 1, nullptr);
-      for (int f = 0; f < nf; ++f) touched[f] = touched[f] || is_bad(current.state[f]);
     }
+    z = best_z;
+    current = best;
     // Re-linearize around the faces that were repaired.
     if (options.regularity != RegularityMode::AllFaces) {
       region = touched;

@@ -57,12 +57,13 @@ struct ParametrizationSolveOptions {
   double elastic_weight = 1e5;    // cost of sector violation of faces without a valid reference
                                   // (per uv unit, times the face's ideal edge length)
   int ring_size = 2;              // rings of faces around bad faces whose variables move
-  int max_ring_size = 16;         // the rings double while repairs fail, up to this
+  int max_ring_size = 32;         // a face's rings double while it stays bad, up to this
   int max_repair_rounds = 24;     // repair rounds (Ipopt solves) before giving up
+  int stagnation_rounds = 8;      // give up after this many rounds without a new best
   int relinearization_rounds = 3;   // at most this many re-linearizations once regular
   double relinearization_tolerance = 1e-3;  // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;
-  double ipopt_tolerance = 1e-7;
+  double ipopt_tolerance = 1e-5;
   double progress_begin = 0, progress_end = 1;  // fraction range of the caller's stage
 };
 

@@ -8,19 +8,64 @@
 
 namespace qgp {
 
-int isoline_axis(const TriMesh& mesh, const Vec3& frame_u, int h) {
-  const int f = TriMesh::face(h);
-  const Vec3 n = mesh.face_normal_unnormalized(f).normalized();
-  const Vec3 fu = (frame_u - frame_u.dot(n) * n).normalized();
-  const Vec3 fv = n.cross(fu);
-  const Vec3 d = mesh.edge_vector(h);
-  // An edge running along u has constant v.
-  return std::abs(d.dot(fu)) >= std::abs(d.dot(fv)) ? 1 : 0;
+IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, const CutGraph& cut) {
+  const int ne = mesh.num_edges(), nf = mesh.num_faces();
+  const bool have_sectors = static_cast<int>(cut.edge_sector.size()) == 3 * nf;
+  // Axis and misalignment (radians) of each feature/boundary halfedge in its face's chart.
+  auto axis_of = [&](int h, double* deviation) {
+    const int f = TriMesh::face(h);
+    const Vec3 n = mesh.face_normal_unnormalized(f).normalized();
+    const Vec3 fu = (cut.frame_u[f] - cut.frame_u[f].dot(n) * n).normalized();
+    const Vec3 d = mesh.edge_vector(h);
+    const double angle = std::atan2(d.dot(n.cross(fu)), d.dot(fu));
+    int q = have_sectors && cut.edge_sector[h] >= 0 ? cut.edge_sector[h] : static_cast<int>(std::lround(angle / (M_PI / 2)));
+    q = ((q % 4) + 4) % 4;
+    double dev = angle - q * M_PI / 2;
+    dev = std::remainder(dev, 2 * M_PI);
+    if (deviation) *deviation = std::abs(dev);
+    return q % 2 == 0 ? 1 : 0;  // q even: the edge runs along u, so v is constant
+  };
+  std::vector<char> iso(ne, 0);
+  for (int e = 0; e < ne; ++e) iso[e] = mesh.is_boundary_edge(e) || (!field.feature_edge.empty() && field.feature_edge[e]);
+  IsolineSelection out;
+  // A triangle cannot have two isoline edges of one axis (its three corners would share that
+  // coordinate): drop the worse aligned edge of such a pair (e.g. the third feature edge of a
+  // triangle with three).
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int f = 0; f < nf; ++f) {
+      int worst = -1;
+      double worst_dev = -1;
+      int count[2] = {0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const int h = 3 * f + k;
+        if (!iso[mesh.edge_of[h]]) continue;
+        ++count[axis_of(h, nullptr)];
+      }
+      if (count[0] < 2 && count[1] < 2) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int h = 3 * f + k;
+        if (!iso[mesh.edge_of[h]]) continue;
+        double dev = 0;
+        const int a = axis_of(h, &dev);
+        if (count[a] >= 2 && dev > worst_dev) worst = h, worst_dev = dev;
+      }
+      iso[mesh.edge_of[worst]] = 0;
+      out.dropped.push_back(mesh.edge_of[worst]);
+      changed = true;
+    }
+  }
+  for (int e = 0; e < ne; ++e) {
+    if (!iso[e]) continue;
+    const int h = mesh.edge_halfedge[e];
+    out.isolines.push_back({h, axis_of(h, nullptr)});
+  }
+  return out;
 }
 
 SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
                                  const SeamlessMapOptions& options, Progress& progress) {
-  progress.begin_stage("seamless_map");
+  progress.check_cancel();
   const int nf = mesh.num_faces(), ne = mesh.num_edges();
   if (static_cast<int>(cut.rotation.size()) != 3 * nf || static_cast<int>(cut.frame_u.size()) != nf ||
       static_cast<int>(cut.is_cut.size()) != ne)
@@ -31,17 +76,12 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
     throw Error(ErrorCode::InvalidArgument, "seamless map: the target edge length must be positive");
 
   ParametrizationProblem problem(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
-  int isolines = 0;
-  for (int e = 0; e < ne; ++e) {
-    const bool feature = !field.feature_edge.empty() && field.feature_edge[e];
-    if (!feature && !mesh.is_boundary_edge(e)) continue;
-    const int h = mesh.edge_halfedge[e];
-    problem.add_isoline(h, isoline_axis(mesh, cut.frame_u[TriMesh::face(h)], h));
-    ++isolines;
-  }
-
+  const IsolineSelection iso = select_isolines(mesh, field, cut);
+  for (const auto& [h, axis] : iso.isolines) problem.add_isoline(h, axis);
+  const int isolines = static_cast<int>(iso.isolines.size());
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
+  solve_options.max_repair_rounds = options.max_repair_rounds;
   ParametrizationSolution solution = problem.solve(solve_options, progress);
 
   SeamlessMap out;
@@ -57,8 +97,9 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.degenerate_before_ipopt = s.degenerate_initial;
   st.forced_degenerate = s.forced_degenerate;
   st.isoline_edges = isolines;
+  st.dropped_isolines = static_cast<int>(iso.dropped.size());
   st.ipopt_solves = s.ipopt_solves;
-  st.regions_grown = std::max(0, s.repair_rounds - 1);
+  st.repair_rounds = s.repair_rounds;
   st.max_region_faces = s.max_region_faces;
   st.min_area_ratio = s.min_area_ratio;
   st.seconds_cholesky = s.seconds_cholesky;

@@ -13,6 +13,7 @@ namespace qgp {
 struct SeamlessMapOptions {
   double edge_length = 1;  // target quad edge length in model units: 1 uv unit = edge_length
   bool regularity = true;  // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
+  int max_repair_rounds = 24;  // Ipopt repair rounds at most (see ParametrizationSolveOptions)
 };
 
 struct SeamlessMapStats {
@@ -25,8 +26,9 @@ struct SeamlessMapStats {
   int flipped_before_ipopt = 0, degenerate_before_ipopt = 0;  // equality-only optimum
   int forced_degenerate = 0;      // made degenerate by the isoline constraints alone (0 expected)
   int isoline_edges = 0;          // feature + boundary edges constrained to isolines
+  int dropped_isolines = 0;       // feature edges left free (see select_isolines)
   int ipopt_solves = 0;
-  int regions_grown = 0;          // repair rounds beyond the first
+  int repair_rounds = 0;          // Ipopt repair rounds (0: the Cholesky optimum was regular)
   int max_region_faces = 0;       // most faces constrained in one Ipopt solve
   double min_area_ratio = 0;      // min parametric / ideal (field-aligned) triangle area
   double seconds_cholesky = 0, seconds_ipopt = 0;
@@ -37,12 +39,18 @@ struct SeamlessMap {
   SeamlessMapStats stats;
 };
 
-// The coordinate (0: u, 1: v) that is constant along the edge of halfedge h when it is an
-// isoline: u for an edge closer to the frame's v direction, v otherwise.
-int isoline_axis(const TriMesh& mesh, const Vec3& frame_u, int h);
+// Feature and boundary edges that become isolines: (halfedge, axis constant along it in
+// face(halfedge)'s chart), from the cut graph's edge sectors. An edge is dropped (listed in
+// `dropped`) when its triangle would otherwise have two isolines of one axis (degenerate).
+struct IsolineSelection {
+  std::vector<std::pair<int, int>> isolines;
+  std::vector<int> dropped;  // edges
+};
+IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, const CutGraph& cut);
 
 // mesh: one component (connectivity built). Feature edges (field.feature_edge) and boundary edges
-// become isolines. Throws Error(Cancelled) on cancel; never fails for flips (they are counted).
+// become isolines. Reports progress with update() within the caller's stage; throws
+// Error(Cancelled) on cancel; never fails for flips (they are counted in the stats).
 SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
                                  const SeamlessMapOptions& options, Progress& progress);
 

@@ -1,0 +1,50 @@
+#include "mesh_writers.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+namespace qgp::cli {
+
+void write_obj(const std::string& path, const TriMesh& mesh,
+               const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv,
+               const std::string& header) {
+  const int nf = mesh.num_faces();
+  if (corner_uv && corner_uv->rows() != 3 * nf) throw std::runtime_error("uv array does not match the mesh");
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (!file) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
+  FILE* out = file.get();
+  std::istringstream lines(header);
+  for (std::string line; std::getline(lines, line);) std::fprintf(out, "# %s\n", line.c_str());
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    std::fprintf(out, "v %.17g %.17g %.17g\n", mesh.V(v, 0), mesh.V(v, 1), mesh.V(v, 2));
+  std::vector<int> vt(3 * nf, -1);
+  if (corner_uv) {
+    // One vt per distinct (vertex, u, v): corners of a vertex inside one chart share it.
+    std::map<std::tuple<int, double, double>, int> index;
+    for (int c = 0; c < 3 * nf; ++c) {
+      const auto key = std::make_tuple(mesh.F(c / 3, c % 3), (*corner_uv)(c, 0), (*corner_uv)(c, 1));
+      auto it = index.find(key);
+      if (it == index.end()) {
+        it = index.emplace(key, static_cast<int>(index.size())).first;
+        std::fprintf(out, "vt %.17g %.17g\n", (*corner_uv)(c, 0), (*corner_uv)(c, 1));
+      }
+      vt[c] = it->second;
+    }
+  }
+  for (int f = 0; f < nf; ++f) {
+    if (corner_uv)
+      std::fprintf(out, "f %d/%d %d/%d %d/%d\n", mesh.F(f, 0) + 1, vt[3 * f] + 1, mesh.F(f, 1) + 1, vt[3 * f + 1] + 1,
+                   mesh.F(f, 2) + 1, vt[3 * f + 2] + 1);
+    else
+      std::fprintf(out, "f %d %d %d\n", mesh.F(f, 0) + 1, mesh.F(f, 1) + 1, mesh.F(f, 2) + 1);
+  }
+  if (std::ferror(out) || std::fflush(out) != 0) throw std::runtime_error("cannot write '" + path + "'");
+}
+
+}  // namespace qgp::cli
