@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Stages the add-on, the manifest and the native library (with every shared library it needs
-beyond glibc / libstdc++ / libgcc / libm, found through an $ORIGIN RUNPATH) into
+beyond glibc / libstdc++ / libgcc / libm / zlib, found through an $ORIGIN RUNPATH) into
 
     dist/<id>-<version>-linux_x64.zip     Blender 4.2+ extension (manifest and __init__.py at the root)
     dist/<id>-<version>-legacy.zip        Blender 3.x add-on (the same files inside a <id>/ folder)
@@ -17,7 +17,7 @@ import zipfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Provided by every Linux system Blender runs on; never bundled.
-SYSTEM = re.compile(r"^(linux-vdso|ld-linux|libc\.so|libm\.so|libstdc\+\+|libgcc_s|libpthread|libdl\.so|librt\.so)")
+SYSTEM = re.compile(r"^(linux-vdso|ld-linux|libc\.so|libm\.so|libstdc\+\+|libgcc_s|libpthread|libdl\.so|librt\.so|libz\.so)")
 
 
 def dependencies(path):

@@ -77,7 +77,10 @@ def main():
         for name in bundled:
             dyn = subprocess.run(["readelf", "-d", os.path.join(lib_dir, name)], capture_output=True, text=True).stdout
             check("$ORIGIN" in dyn, f"{name} lacks an $ORIGIN RUNPATH")
-        hidden = [p for p in (system_copy(n) for n in bundled if n != "libqgp.so") if p]
+        # The interpreter's own libraries stay visible (it could not start otherwise).
+        ldd = subprocess.run(["ldd", "/usr/bin/python3"], capture_output=True, text=True).stdout
+        interpreter = {os.path.realpath(m) for m in re.findall(r"=> (\S+)", ldd)}
+        hidden = [p for p in (system_copy(n) for n in bundled if n != "libqgp.so") if p and p not in interpreter]
         # Pure ctypes (numpy itself needs the system's BLAS, which is hidden here).
         probe = ("import ctypes, json; l = ctypes.CDLL(%r); "
                  "V = (ctypes.c_double * 12)(0,0,0, 1,0,0, 0,1,0, 0,0,1); "
