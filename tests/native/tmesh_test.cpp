@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/parametrization.h"
 #include "polycube.h"
+#include "quad_map.h"
 #include "test_support.h"
 #include "tmesh/tmesh_system.h"
 #include "tmesh/trace_tmesh.h"
@@ -173,24 +174,35 @@ void expect_valid(const Case& c, const TMesh& tm) {
       if (t[k].face == t[k + 1].face && (t[k + 1].uv - t[k].uv).norm() > 0)
         by_face[t[k].face].push_back({static_cast<int>(ei), static_cast<int>(k), t[k].uv, t[k + 1].uv});
   }
-  std::vector<Vec3> node_positions;
-  for (const TMeshNode& n : tm.nodes) node_positions.push_back(n.point.position(mesh));
+  // Node positions in a hash grid (cells of a few tolerances) for "is this point a node?".
+  const double cell = 4 * tol3;
+  auto cell_of = [&](const Vec3& x) {
+    return std::array<long long, 3>{std::llround(x.x() / cell), std::llround(x.y() / cell), std::llround(x.z() / cell)};
+  };
+  std::map<std::array<long long, 3>, std::vector<Vec3>> node_grid;
+  for (const TMeshNode& n : tm.nodes) {
+    const Vec3 x = n.point.position(mesh);
+    node_grid[cell_of(x)].push_back(x);
+  }
+  const Parametrization dparam = c.param.to_double();
   auto is_node_point = [&](int face, const Vec2& uv) {
-    // uv -> position through the face's chart.
-    const Parametrization p = c.param.to_double();
-    (void)p;
-    SurfacePoint sp;
-    sp.face = face;
-    const Vec2 p0(c.param.to_double(c.param.uv[3 * face][0]), c.param.to_double(c.param.uv[3 * face][1]));
-    const Vec2 p1(c.param.to_double(c.param.uv[3 * face + 1][0]), c.param.to_double(c.param.uv[3 * face + 1][1]));
-    const Vec2 p2(c.param.to_double(c.param.uv[3 * face + 2][0]), c.param.to_double(c.param.uv[3 * face + 2][1]));
-    const Vec2 e1 = p1 - p0, e2 = p2 - p0, r = uv - p0;
+    const Vec2 p0 = dparam.corner(face, 0), e1 = dparam.corner(face, 1) - p0, e2 = dparam.corner(face, 2) - p0;
+    const Vec2 r = uv - p0;
     const double det = e1.x() * e2.y() - e1.y() * e2.x();
     const double l1 = (r.x() * e2.y() - r.y() * e2.x()) / det, l2 = (e1.x() * r.y() - e1.y() * r.x()) / det;
+    SurfacePoint sp;
+    sp.face = face;
     sp.barycentric = Vec3(1 - l1 - l2, l1, l2);
     const Vec3 x = sp.position(mesh);
-    for (const Vec3& np : node_positions)
-      if ((np - x).norm() < tol3) return true;
+    const auto k = cell_of(x);
+    for (long long dx = -1; dx <= 1; ++dx)
+      for (long long dy = -1; dy <= 1; ++dy)
+        for (long long dz = -1; dz <= 1; ++dz) {
+          auto it = node_grid.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it == node_grid.end()) continue;
+          for (const Vec3& np : it->second)
+            if ((np - x).norm() < tol3) return true;
+        }
     return false;
   };
   int violations = 0;
@@ -616,6 +628,42 @@ TEST(TMesh, LargerRotatedStaircase) {
     std::cout << c.name << ": " << c.mesh.num_faces() << " faces, T-mesh " << tm.nodes.size() << " nodes, "
               << tm.edges.size() << " edges, " << tm.cells.size() << " cells, " << tm.stats.trace_seconds << " s\n";
   }
+}
+
+// Real meshes (seamless maps from splitting every triangle into three unit quads): genus,
+// boundaries, sharp features, singularities of every valence; prints figures per mesh.
+void quad_map_case(const std::string& file, double sharp_deg, std::array<int, 3> triple = {1, 0, 1}) {
+  const IntakeResult in = test::load_mesh(file);
+  const TriMesh tri = test::component_mesh(in, 0);
+  const std::vector<char> sharp = sharp_deg > 0 ? test::sharp_edges(tri, sharp_deg) : std::vector<char>{};
+  const test::QuadMap qm = test::make_quad_map(tri, sharp, triple);
+  Case c{file + (triple[1] != 0 ? " oblique" : "") + (sharp_deg > 0 ? " features" : ""), qm.mesh,
+         test::exact_integer_map(qm.mesh, qm.param, 24), sharp_deg > 0 ? qm.features : std::vector<char>{}};
+  ASSERT_EQ(exact_transition_residual(c.mesh, c.param), 0) << c.name;
+  const TMesh tm = trace(c);
+  const TMeshCheck check = check_tmesh(tm);
+  int features = 0, boundary = 0;
+  for (int e = 0; e < c.mesh.num_edges(); ++e) {
+    boundary += c.mesh.is_boundary_edge(e);
+    features += !c.features.empty() && c.features[e];
+  }
+  std::printf("[tmesh] %-24s %7d triangles, %4d feature + %4d boundary edges -> %6zu nodes %6zu edges %6zu cells, "
+              "%5d T-junctions, %6d separatrices, trace %.3f s\n",
+              c.name.c_str(), c.mesh.num_faces(), features, boundary, tm.nodes.size(), tm.edges.size(), tm.cells.size(),
+              check.t_junctions, tm.stats.motorcycles, tm.stats.trace_seconds);
+  expect_valid(c, tm);
+}
+
+TEST(TMesh, QuadMapsOfRealMeshesWithFeaturesAndBoundaries) {
+  for (const char* f : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj"}) quad_map_case(f, 40);
+  for (const char* f : {"camelhead.off", "face.obj", "beetle.off"}) quad_map_case(f, -1);
+}
+
+TEST(TMesh, ObliqueQuadMapsOfClosedMeshes) {
+  quad_map_case("spot.obj", -1, {4, 3, 5});
+  quad_map_case("torus.obj", -1, {12, 5, 13});
+  quad_map_case("fertility.off", -1, {15, 8, 17});
+  quad_map_case("kitten.obj", -1, {21, 20, 29});
 }
 
 TEST(TMesh, CellSystemAndReport) {
