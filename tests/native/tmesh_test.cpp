@@ -6,10 +6,12 @@
 
 #include <cmath>
 #include <map>
+#include <random>
 #include <sstream>
 
 #include "core/error.h"
 #include "core/parametrization.h"
+#include "core/sanitize_isolines.h"
 #include "polycube.h"
 #include "quad_map.h"
 #include "test_support.h"
@@ -440,6 +442,20 @@ TEST(TMesh, FeaturesBecomeEdges) {
   }
   const Case some = make_case("vertical creases", pc.mesh, pc.param, vertical);
   expect_valid(some, trace(some));
+
+  // A noisy map (features off their isolines by ~1e-6) sanitized with isoline constraints:
+  // features are exact isolines again, so the cell equations hold exactly.
+  Parametrization noisy = pc.param;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> noise(-1e-6, 1e-6);
+  for (int k = 0; k < noisy.uv.rows(); ++k) noisy.uv.row(k) += Vec2(noise(rng), noise(rng)).transpose();
+  SanitizeOptions so;
+  so.fraction_bits = 24;
+  const SanitizeResult r =
+      sanitize_with_isolines(pc.mesh, noisy, isoline_constraints(pc.mesh, pc.param, pc.crease_edges, true), so);
+  ASSERT_EQ(r.unresolved_equations, 0);
+  const Case exact{"noisy creases, isoline sanitization", pc.mesh, r.param, pc.crease_edges};
+  expect_valid(exact, trace(exact));
 }
 
 TEST(TMesh, FeatureCurveWithoutSingularities) {
