@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <atomic>
 #include <map>
 #include <random>
 #include <sstream>
@@ -680,6 +681,68 @@ TEST(TMesh, ObliqueQuadMapsOfClosedMeshes) {
   quad_map_case("torus.obj", -1, {12, 5, 13});
   quad_map_case("fertility.off", -1, {15, 8, 17});
   quad_map_case("kitten.obj", -1, {21, 20, 29});
+}
+
+TEST(TMesh, RandomlyBrokenMapsNeverCrashOrHang) {
+  // Noise of up to half a grid cell flips triangles here and there: the tracer either throws
+  // Error(StageFailed) or returns a valid T-mesh (flips inside cells do not matter).
+  int traced = 0, refused = 0;
+  for (unsigned seed = 1; seed <= 24; ++seed) {
+    auto spec = test::staircase({{3, 2, 1}, {2, 2, 1}, {1, 1, 0}}, {uniform(3), uniform(3), uniform(3)});
+    spec.subdivisions = 2 + seed % 2;
+    spec.chart_rotation = seed % 3 == 0 ? 0.0 : 0.25 * seed;
+    test::Polycube pc = test::make_polycube(spec);
+    std::mt19937 rng(seed);
+    const double amount = (0.02 + 0.1 * (seed % 6)) / spec.subdivisions;
+    std::uniform_real_distribution<double> noise(-amount, amount);
+    for (int k = 0; k < pc.param.uv.rows(); ++k) pc.param.uv.row(k) += Vec2(noise(rng), noise(rng)).transpose();
+    SanitizeOptions so;
+    so.fraction_bits = 24;
+    const SanitizeResult r = sanitize_parametrization(pc.mesh, pc.param, so);
+    const Case c{"noisy " + std::to_string(seed), pc.mesh, r.param, {}};
+    try {
+      Progress progress;
+      TraceOptions options;
+      options.max_steps = 200000;
+      const TMesh tm = trace_tmesh(c.mesh, c.param, options, progress);
+      expect_valid(c, tm);
+      ++traced;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::StageFailed) << c.name << ": " << e.what();
+      ++refused;
+    }
+  }
+  std::cout << "noisy maps: " << traced << " traced, " << refused << " refused\n";
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(traced, 0);
+}
+
+TEST(TMesh, CancelStopsTracing) {
+  const auto cube = test::make_grid_cube(3);
+  const Case c = make_case("cube", cube.mesh, cube.param);
+  std::atomic<bool> cancel{true};
+  Progress progress(nullptr, &cancel);
+  try {
+    trace_tmesh(c.mesh, c.param, TraceOptions{}, progress);
+    ADD_FAILURE() << "cancel ignored";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Cancelled);
+  }
+}
+
+TEST(TMesh, InvalidInputIsRefused) {
+  const auto cube = test::make_grid_cube(2);
+  Case c = make_case("cube", cube.mesh, cube.param);
+  Progress progress;
+  TraceOptions options;
+  options.feature_edges.assign(3, 1);  // wrong size
+  EXPECT_THROW(trace_tmesh(c.mesh, c.param, options, progress), Error);
+  ExactParametrization short_param = c.param;
+  short_param.uv.pop_back();
+  EXPECT_THROW(trace_tmesh(c.mesh, short_param, TraceOptions{}, progress), Error);
+  ExactParametrization huge = c.param;
+  huge.uv[0][0] = int64_t(1) << 62;
+  EXPECT_THROW(trace_tmesh(c.mesh, huge, TraceOptions{}, progress), Error);
 }
 
 TEST(TMesh, CellSystemAndReport) {

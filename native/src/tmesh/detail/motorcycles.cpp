@@ -602,6 +602,7 @@ void MotorcycleTracer::process(const Event& e) {
 }
 
 void MotorcycleTracer::run() {
+  progress_.check_cancel();
   prepare_walls_and_corners();
   start_motorcycles();
   long long processed = 0;
