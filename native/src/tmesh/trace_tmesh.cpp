@@ -1,3 +1,11 @@
+// T-mesh construction in two steps:
+//  1. MotorcycleTracer (detail/motorcycles.h) traces every separatrix exactly and records, per
+//     separatrix, its pieces in the faces and the nodes along it (by travel time); nodes are
+//     identified by canonical surface points, so every meeting of traces shares one node.
+//  2. Assembler (below) cuts separatrices and feature/boundary curves at their nodes into
+//     pieces, collects each node's incidences in its local frame, merges the straight degree-2
+//     nodes of head-on meetings, orients the edges, and walks the faces of the embedded graph
+//     into cells (corners = quarter-turn angles at nodes).
 #include "tmesh/trace_tmesh.h"
 
 #include <algorithm>
