@@ -34,6 +34,10 @@ void Session::set_options(const RemeshOptions& options) {
 void Session::run(Job job, Progress& progress) {
   Timer total;
   report_ = Json::object();
+  quads_.reset();
+  quad_source_face_.clear();
+  corner_uv_.clear();
+  cut_edges_.clear();
   report_["status"] = "ok";
   report_["error"] = nullptr;
   report_["timings_s"] = Json::object();

@@ -6,6 +6,7 @@
 
 #include "core/json.h"
 #include "core/progress.h"
+#include "core/quad_mesh.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
@@ -43,6 +44,15 @@ class Session {
   // Target quad edge length in model units, from the options and the total surface area.
   double target_edge_length() const;
 
+  // Results of the last successful job (null / empty when there is none).
+  // Quad mesh over all components; quad_source_face: per quad the input face it lies on.
+  const QuadMesh* quad_result() const { return quads_ ? quads_.get() : nullptr; }
+  const std::vector<int>& quad_source_face() const { return quad_source_face_; }
+  // Integer-grid map per input triangle corner (#input faces x 3 x 2, 1 unit = 1 quad; NaN where
+  // intake removed the face) and the cut edges as input vertex pairs.
+  const std::vector<double>& corner_uv() const { return corner_uv_; }
+  const std::vector<std::array<int, 2>>& cut_edges() const { return cut_edges_; }
+
  private:
   void run_intake_stage(Progress& progress);
   void prepare_components();
@@ -53,6 +63,10 @@ class Session {
   std::unique_ptr<IntakeResult> intake_;
   std::vector<ComponentState> components_;
   Json report_;
+  std::unique_ptr<QuadMesh> quads_;
+  std::vector<int> quad_source_face_;
+  std::vector<double> corner_uv_;
+  std::vector<std::array<int, 2>> cut_edges_;
 };
 
 }  // namespace qgp
