@@ -82,7 +82,7 @@ inline ExactParametrization exact_integer_map(const TriMesh& mesh, const Paramet
   for (int k = 0; k < nc; ++k)
     for (int a = 0; a < 2; ++a) {
       if (param.uv(k, a) != std::round(param.uv(k, a))) throw std::runtime_error("exact_integer_map: non-integer coordinate");
-      ex.uv[k][a] = static_cast<int64_t>(std::llround(param.uv(k, a))) << fraction_bits;
+      ex.uv[k][a] = static_cast<int64_t>(std::llround(param.uv(k, a))) * (int64_t(1) << fraction_bits);
     }
   ex.rotation = param.rotation;
   ex.is_cut = param.is_cut;

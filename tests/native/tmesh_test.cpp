@@ -671,15 +671,25 @@ void quad_map_case(const std::string& file, double sharp_deg, std::array<int, 3>
   expect_valid(c, tm);
 }
 
+// Sanitizer builds (several times slower) run the smaller meshes only.
+#ifdef QGP_SANITIZED
+constexpr bool kAllMeshes = false;
+#else
+constexpr bool kAllMeshes = true;
+#endif
+
 TEST(TMesh, QuadMapsOfRealMeshesWithFeaturesAndBoundaries) {
-  for (const char* f : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj"}) quad_map_case(f, 40);
-  for (const char* f : {"camelhead.off", "face.obj", "beetle.off"}) quad_map_case(f, -1);
+  for (const char* f : {"joint.obj", "block.obj", "fandisk.obj", "wingnut.obj"}) quad_map_case(f, 40);
+  quad_map_case("camelhead.off", -1);
+  if (!kAllMeshes) return;
+  for (const char* f : {"face.obj", "beetle.off"}) quad_map_case(f, -1);
 }
 
 TEST(TMesh, ObliqueQuadMapsOfClosedMeshes) {
-  quad_map_case("spot.obj", -1, {4, 3, 5});
   quad_map_case("torus.obj", -1, {12, 5, 13});
   quad_map_case("fertility.off", -1, {15, 8, 17});
+  if (!kAllMeshes) return;
+  quad_map_case("spot.obj", -1, {4, 3, 5});
   quad_map_case("kitten.obj", -1, {21, 20, 29});
 }
 
@@ -742,6 +752,8 @@ TEST(TMesh, InvalidInputIsRefused) {
   EXPECT_THROW(trace_tmesh(c.mesh, short_param, TraceOptions{}, progress), Error);
   ExactParametrization huge = c.param;
   huge.uv[0][0] = int64_t(1) << 62;
+  EXPECT_THROW(trace_tmesh(c.mesh, huge, TraceOptions{}, progress), Error);
+  huge.uv[0][0] = INT64_MIN;
   EXPECT_THROW(trace_tmesh(c.mesh, huge, TraceOptions{}, progress), Error);
 }
 

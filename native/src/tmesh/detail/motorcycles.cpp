@@ -43,7 +43,8 @@ MotorcycleTracer::MotorcycleTracer(const TriMesh& mesh, const ExactParametrizati
   for (int c = 0; c < nc; ++c)
     for (int a = 0; a < 2; ++a) {
       const int64_t x = param.uv[c][a], t = param.translation[c][a];
-      if (std::abs(x) >= kCoordinateLimit / 2 || std::abs(t) >= kCoordinateLimit / 2)
+      const int64_t limit = kCoordinateLimit / 2;
+      if (x >= limit || x <= -limit || t >= limit || t <= -limit)
         throw Error(ErrorCode::InvalidArgument,
                     "trace_tmesh: parameter coordinates exceed the exact range (use fewer fraction bits)");
       uv2_[c][a] = 2 * x;
@@ -63,7 +64,7 @@ void MotorcycleTracer::fail(const std::string& message) const { throw Error(Erro
 P2 MotorcycleTracer::transfer(int h, const P2& p) const {
   const P2 r = rotate_quarter(p, param_.rotation[h]);
   const P2 q{r[0] + translation2_[h][0], r[1] + translation2_[h][1]};
-  if (std::abs(q[0]) >= kCoordinateLimit || std::abs(q[1]) >= kCoordinateLimit)
+  if (q[0] >= kCoordinateLimit || q[0] <= -kCoordinateLimit || q[1] >= kCoordinateLimit || q[1] <= -kCoordinateLimit)
     fail("a separatrix left the exact coordinate range (it is extremely long)");
   return q;
 }
