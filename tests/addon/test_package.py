@@ -78,9 +78,18 @@ def main():
             dyn = subprocess.run(["readelf", "-d", os.path.join(lib_dir, name)], capture_output=True, text=True).stdout
             check("$ORIGIN" in dyn, f"{name} lacks an $ORIGIN RUNPATH")
         hidden = [p for p in (system_copy(n) for n in bundled if n != "libqgp.so") if p]
-        probe = ("import sys; sys.path.insert(0, %r); import core.binding as b; "
-                 "s = b.Session([[0,0,0],[1,0,0],[0,1,0],[0,0,1]], [[0,2,1],[0,1,3],[1,2,3],[2,0,3]]); "
-                 "s.run(b.JOB_INTAKE); r = s.report(); print(b.version(), r['input']['genus'])" % tmp)
+        # Pure ctypes (numpy itself needs the system's BLAS, which is hidden here).
+        probe = ("import ctypes, json; l = ctypes.CDLL(%r); "
+                 "V = (ctypes.c_double * 12)(0,0,0, 1,0,0, 0,1,0, 0,0,1); "
+                 "T = (ctypes.c_int32 * 12)(0,2,1, 0,1,3, 1,2,3, 2,0,3); "
+                 "s = ctypes.c_void_p(); assert l.qgp_session_create(V, 4, T, 4, ctypes.byref(s)) == 0; "
+                 "assert l.qgp_job_start(s, 0) == 0; st = ctypes.c_int(); "
+                 "assert l.qgp_job_wait(s, ctypes.c_double(-1), ctypes.byref(st)) == 0; "
+                 "n = ctypes.c_int64(); l.qgp_report_json(s, None, 0, ctypes.byref(n)); "
+                 "b = ctypes.create_string_buffer(n.value); l.qgp_report_json(s, b, n, ctypes.byref(n)); "
+                 "l.qgp_version.restype = ctypes.c_char_p; "
+                 "print(l.qgp_version().decode(), json.loads(b.value)['input']['genus'])"
+                 % os.path.join(lib_dir, "libqgp.so"))
         env = dict(os.environ)
         env.pop("QGP_LIBRARY", None)
         env.pop("LD_LIBRARY_PATH", None)

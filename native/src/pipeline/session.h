@@ -2,11 +2,14 @@
 // the target density re-runs quantization and later stages, nothing before them.
 #pragma once
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/json.h"
 #include "core/progress.h"
 #include "core/quad_mesh.h"
+#include "cross_field/cross_field.h"
+#include "cut_graph/cut_graph.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
@@ -21,6 +24,8 @@ struct ComponentState {
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
   std::vector<int> face_map;        // component face -> intake mesh face
   std::vector<char> feature_edges;  // #E of `mesh`: caller's feature edges
+  std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
+  std::optional<CutGraph> cut;      // stage 1b
 };
 
 class Session {
@@ -57,6 +62,7 @@ class Session {
   void run_intake_stage(Progress& progress);
   void prepare_components();
   void run_remesh_stages(Job job, Progress& progress);
+  void run_field_stages(Progress& progress);
 
   PolygonSoup input_;
   RemeshOptions options_;
