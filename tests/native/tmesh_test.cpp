@@ -87,6 +87,7 @@ void expect_valid(const Case& c, const TMesh& tm) {
   EXPECT_LE(check.max_abs_coefficient, 1);
   EXPECT_EQ(check.edges_without_cells, 0);
   EXPECT_GT(tm.cells.size(), 0u);
+  EXPECT_EQ(tm.stats.walls_not_isolines, 0);
 
   // Every singularity (independent double count) is a node with the right index.
   const std::vector<int> q = quarter_turns(mesh, c.param);

@@ -87,6 +87,9 @@ struct TMeshStats {
   int virtual_corners = 0;     // closed feature/boundary curves that got a virtual node
   int seeds = 0;               // regular seed vertices (components without singularities)
   int merged_nodes = 0;        // straight degree-2 nodes removed (head-on meeting points)
+  int walls_not_isolines = 0;  // feature/boundary mesh edges that are no exact isolines of the
+                               // input map (then cell equations along them hold only roughly;
+                               // sanitize_with_isolines avoids this)
 };
 
 struct TMesh {

@@ -75,6 +75,7 @@ Json tmesh_report(const TMesh& tmesh) {
   j["virtual_corners"] = tmesh.stats.virtual_corners;
   j["seeds"] = tmesh.stats.seeds;
   j["steps"] = tmesh.stats.steps;
+  j["walls_not_isolines"] = tmesh.stats.walls_not_isolines;
   return j;
 }
 

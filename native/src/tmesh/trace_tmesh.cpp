@@ -519,6 +519,7 @@ TMesh trace_tmesh(const TriMesh& mesh, const ExactParametrization& param, const 
   tm.stats.cut_vertex_passes = s.cut_vertex_passes;
   tm.stats.virtual_corners = s.virtual_corners;
   tm.stats.seeds = s.seeds;
+  tm.stats.walls_not_isolines = s.walls_not_isolines;
   tm.stats.trace_seconds = timer.seconds();
   progress.update(1.0);
   return tm;

@@ -52,8 +52,14 @@ MotorcycleTracer::MotorcycleTracer(const TriMesh& mesh, const ExactParametrizati
     }
   face_ok_.assign(nf, 0);
   for (int f = 0; f < nf; ++f) face_ok_[f] = orient(uv2_[3 * f], uv2_[3 * f + 1], uv2_[3 * f + 2]) > 0;
-  for (int e = 0; e < mesh.num_edges(); ++e)
+  for (int e = 0; e < mesh.num_edges(); ++e) {
     if (mesh.is_boundary_edge(e)) wall_edge_[e] = 1;
+    if (!wall_edge_[e]) continue;
+    const int h = mesh.edge_halfedge[e];
+    const P2& a = uv2_[h];
+    const P2& b = uv2_[TriMesh::next(h)];
+    stats_.walls_not_isolines += a[0] != b[0] && a[1] != b[1];
+  }
   stars_.resize(mesh.num_vertices());
   for (int v = 0; v < mesh.num_vertices(); ++v) stars_[v] = analyse_vertex(mesh, uv2_, param.rotation, wall_edge_, v);
   face_records_.resize(nf);

@@ -87,6 +87,7 @@ struct TraceStats {
   int cut_vertex_passes = 0;     // passes through a vertex whose one-ring is cut
   int virtual_corners = 0;       // closed walls without a corner got one
   int seeds = 0;
+  int walls_not_isolines = 0;    // feature/boundary edges whose corners share neither u nor v
 };
 
 class MotorcycleTracer {
