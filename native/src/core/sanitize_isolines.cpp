@@ -1,0 +1,237 @@
+#include "core/sanitize_isolines.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <numeric>
+
+#include "core/error.h"
+
+namespace qgp {
+
+namespace {
+
+// Sparse integer linear expression: (variable, coefficient), sorted by variable.
+using Expr = std::vector<std::pair<int, int64_t>>;
+
+void add_scaled(Expr& acc, const Expr& e, int64_t scale) {
+  Expr out;
+  out.reserve(acc.size() + e.size());
+  size_t i = 0, j = 0;
+  while (i < acc.size() || j < e.size()) {
+    if (j == e.size() || (i < acc.size() && acc[i].first < e[j].first)) {
+      out.push_back(acc[i++]);
+    } else if (i == acc.size() || e[j].first < acc[i].first) {
+      out.push_back({e[j].first, e[j].second * scale});
+      ++j;
+    } else {
+      const int64_t c = acc[i].second + e[j].second * scale;
+      if (c != 0) out.push_back({acc[i].first, c});
+      ++i, ++j;
+    }
+  }
+  acc.swap(out);
+}
+
+Expr make_expr(std::vector<std::pair<int, int64_t>> terms) {
+  std::sort(terms.begin(), terms.end());
+  Expr out;
+  for (const auto& t : terms) {
+    if (!out.empty() && out.back().first == t.first) out.back().second += t.second;
+    else out.push_back(t);
+  }
+  out.erase(std::remove_if(out.begin(), out.end(), [](const auto& t) { return t.second == 0; }), out.end());
+  return out;
+}
+
+// Component `axis` of R^r (x, y) as a combination of x (index 0) and y (index 1): {which, sign}.
+std::pair<int, int> rotated_component(int r, int axis) {
+  switch (((r % 4) + 4) % 4) {
+    case 0: return {axis, 1};
+    case 1: return axis == 0 ? std::pair{1, -1} : std::pair{0, 1};   // (-y, x)
+    case 2: return {axis, -1};
+    default: return axis == 0 ? std::pair{1, 1} : std::pair{0, -1};  // (y, -x)
+  }
+}
+
+}  // namespace
+
+std::vector<IsolineConstraint> isoline_constraints(const TriMesh& mesh, const Parametrization& param,
+                                                   const std::vector<char>& edges, bool include_boundary) {
+  std::vector<IsolineConstraint> out;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const bool flagged = !edges.empty() && edges[e];
+    if (!flagged && !(include_boundary && mesh.is_boundary_edge(e))) continue;
+    const int h = mesh.edge_halfedge[e];
+    const Vec2 d = param.corner(h / 3, (h % 3 + 1) % 3) - param.corner(h / 3, h % 3);
+    out.push_back({h, std::fabs(d.x()) <= std::fabs(d.y()) ? 0 : 1});
+  }
+  return out;
+}
+
+SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization& param,
+                                      const std::vector<IsolineConstraint>& isolines, const SanitizeOptions& options) {
+  const int nf = mesh.num_faces(), nc = 3 * nf;
+  if (param.uv.rows() != nc || static_cast<int>(param.rotation.size()) != nc)
+    throw Error(ErrorCode::Internal, "sanitize: parametrization does not match the mesh");
+  auto is_cut = [&](int h) {
+    return (!param.is_cut.empty() && param.is_cut[mesh.edge_of[h]]) || param.rotation[h] % 4 != 0;
+  };
+
+  // Wedges: corners joined across non-cut interior edges.
+  std::vector<int> parent(nc);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0 || o < h || is_cut(h)) continue;
+    parent[find(h)] = find(3 * (o / 3) + (o % 3 + 1) % 3);
+    parent[find(3 * (h / 3) + (h % 3 + 1) % 3)] = find(o);
+  }
+  std::vector<int> wedge_of(nc), wedge_vertex, root_wedge(nc, -1);
+  for (int c = 0; c < nc; ++c) {
+    const int r = find(c);
+    if (root_wedge[r] < 0) root_wedge[r] = static_cast<int>(wedge_vertex.size()), wedge_vertex.push_back(mesh.F(c / 3, c % 3));
+    wedge_of[c] = root_wedge[r];
+  }
+  const int nw = static_cast<int>(wedge_vertex.size());
+
+  // Unknowns: 2 per wedge (u, v), then 2 per cut edge translation. Continuous values and snapping.
+  std::vector<double> value(2 * nw, 0);
+  std::vector<int> count(nw, 0);
+  for (int c = 0; c < nc; ++c) {
+    value[2 * wedge_of[c]] += param.uv(c, 0);
+    value[2 * wedge_of[c] + 1] += param.uv(c, 1);
+    ++count[wedge_of[c]];
+  }
+  for (int w = 0; w < nw; ++w) value[2 * w] /= count[w], value[2 * w + 1] /= count[w];
+  std::vector<char> snapped(2 * nw, 0);
+  for (int w = 0; w < nw; ++w)
+    if (!options.snap_vertex.empty() && options.snap_vertex[wedge_vertex[w]]) snapped[2 * w] = snapped[2 * w + 1] = 1;
+  if (!options.snap_corner_axes.empty())
+    for (int c = 0; c < nc; ++c)
+      for (int a = 0; a < 2; ++a)
+        if ((options.snap_corner_axes[c] >> a) & 1) snapped[2 * wedge_of[c] + a] = 1;
+  std::vector<int> wedges_at_vertex(mesh.num_vertices(), 0);
+  for (int w = 0; w < nw; ++w) ++wedges_at_vertex[wedge_vertex[w]];
+
+  // Transition equations W_g - R^r W_f - T = 0 per endpoint of each cut edge, per coordinate;
+  // those at singular vertices first, so that translations become their pivots.
+  std::vector<int> holonomy(mesh.num_vertices(), 0);
+  for (int h = 0; h < nc; ++h)
+    if (mesh.opposite[h] >= 0) holonomy[mesh.to(h)] += param.rotation[h];
+  std::vector<int> translation_var(nc, -1);
+  std::vector<Expr> first, later;
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0 || o < h || !is_cut(h)) continue;
+    const int t = static_cast<int>(value.size());
+    translation_var[h] = t;
+    const Vec2 tr = param.translation(mesh, h);
+    value.push_back(tr.x()), value.push_back(tr.y());
+    const char snap_t = options.snap_vertex.empty() ? 0 : 1;
+    snapped.push_back(snap_t), snapped.push_back(snap_t);
+    const int f = h / 3, g = o / 3, r = param.rotation[h];
+    const bool singular_end = holonomy[mesh.from(h)] % 4 != 0 || holonomy[mesh.to(h)] % 4 != 0;
+    const int ends[2][2] = {{3 * f + h % 3, 3 * g + (o % 3 + 1) % 3}, {3 * f + (h % 3 + 1) % 3, 3 * g + o % 3}};
+    for (const auto& end : ends)
+      for (int a = 0; a < 2; ++a) {
+        const auto [which, sgn] = rotated_component(r, a);
+        Expr e = make_expr({{2 * wedge_of[end[1]] + a, 1}, {2 * wedge_of[end[0]] + which, -sgn}, {t + a, -1}});
+        (singular_end ? first : later).push_back(std::move(e));
+      }
+  }
+  std::vector<Expr> equations = std::move(first);
+  for (const IsolineConstraint& iso : isolines) {
+    const int h = iso.halfedge;
+    if (h < 0 || h >= nc || iso.axis < 0 || iso.axis > 1)
+      throw Error(ErrorCode::InvalidArgument, "sanitize: isoline constraint out of range");
+    equations.push_back(make_expr({{2 * wedge_of[h] + iso.axis, 1}, {2 * wedge_of[TriMesh::next(h)] + iso.axis, -1}}));
+  }
+  for (Expr& e : later) equations.push_back(std::move(e));
+
+  // Elimination with unit pivots; definition[x] expresses x by variables free at that time.
+  const int nvars = static_cast<int>(value.size());
+  std::vector<Expr> definition(nvars);
+  std::vector<char> eliminated(nvars, 0);
+  std::vector<int> order;
+  auto rank = [&](int var) {
+    const int base = var < 2 * nw ? 10 + wedges_at_vertex[wedge_vertex[var / 2]] : 0;  // translations first
+    return (snapped[var] ? 1000000 : 0) + base;
+  };
+  int unresolved = 0;
+  for (Expr& eq : equations) {
+    for (bool again = true; again;) {
+      again = false;
+      for (size_t i = 0; i < eq.size(); ++i) {
+        if (!eliminated[eq[i].first]) continue;
+        const auto term = eq[i];
+        eq.erase(eq.begin() + static_cast<long>(i));
+        add_scaled(eq, definition[term.first], term.second);
+        again = true;
+        break;
+      }
+    }
+    if (eq.empty()) continue;  // implied by earlier equations
+    int64_t common = 0;
+    for (const auto& term : eq) common = std::gcd(common, std::abs(term.second));
+    if (common > 1)
+      for (auto& term : eq) term.second /= common;
+    int pivot = -1;
+    for (size_t i = 0; i < eq.size(); ++i)
+      if (std::abs(eq[i].second) == 1 && (pivot < 0 || rank(eq[i].first) < rank(eq[pivot].first))) pivot = static_cast<int>(i);
+    if (pivot < 0) {
+      ++unresolved;
+      continue;
+    }
+    const int var = eq[pivot].first;
+    const int64_t inv = -eq[pivot].second;  // x = -(rest) / c with c = +-1
+    Expr def;
+    for (const auto& term : eq)
+      if (term.first != var) def.push_back({term.first, term.second * inv});
+    definition[var] = std::move(def);
+    eliminated[var] = 1;
+    order.push_back(var);
+  }
+
+  // Round the free unknowns, then back-substitute.
+  SanitizeResult result;
+  ExactParametrization& ex = result.param;
+  ex.fraction_bits = options.fraction_bits;
+  const double scale = std::ldexp(1.0, options.fraction_bits);
+  const int64_t snap_unit = int64_t(1) << std::max(0, options.fraction_bits - options.snap_bits);
+  std::vector<int64_t> exact(nvars, 0);
+  for (int x = 0; x < nvars; ++x) {
+    if (eliminated[x]) continue;
+    exact[x] = snapped[x] ? static_cast<int64_t>(std::llround(value[x] * scale / snap_unit)) * snap_unit
+                          : static_cast<int64_t>(std::llround(value[x] * scale));
+  }
+  for (auto it = order.rbegin(); it != order.rend(); ++it) {
+    int64_t sum = 0;
+    for (const auto& term : definition[*it]) sum += term.second * exact[term.first];
+    exact[*it] = sum;
+  }
+  ex.uv.resize(nc);
+  for (int c = 0; c < nc; ++c) {
+    ex.uv[c] = {exact[2 * wedge_of[c]], exact[2 * wedge_of[c] + 1]};
+    for (int a = 0; a < 2; ++a)
+      result.max_change = std::max(result.max_change, std::fabs(ex.uv[c][a] / scale - param.uv(c, a)));
+  }
+  ex.rotation = param.rotation;
+  ex.translation.assign(nc, {0, 0});
+  ex.is_cut.assign(mesh.num_edges(), 0);
+  for (int h = 0; h < nc; ++h) {
+    if (translation_var[h] < 0) continue;
+    const int o = mesh.opposite[h];
+    ex.translation[h] = {exact[translation_var[h]], exact[translation_var[h] + 1]};
+    ex.translation[o] = rotate_quarter(IVec2{-ex.translation[h][0], -ex.translation[h][1]}, -param.rotation[h]);
+    ex.is_cut[mesh.edge_of[h]] = 1;
+  }
+  result.unresolved_equations = unresolved;
+  return result;
+}
+
+}  // namespace qgp
