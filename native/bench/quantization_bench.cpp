@@ -2,7 +2,7 @@
 // T-meshes (torus grids, planar rectangles with boundary, polycubes with many singularities),
 // randomly split into T-junction-rich layouts. Prints a table; never fails on timing.
 //
-//   quantization_bench [max_edges]     (default 200000)
+//   quantization_bench [max_edges [family]]     (default 200000, all families)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -45,9 +45,11 @@ TMesh make(const std::string& family, int splits, unsigned seed) {
 
 int main(int argc, char** argv) {
   const int max_edges = argc > 1 ? std::atoi(argv[1]) : 200000;
+  const std::string only = argc > 2 ? argv[2] : "";
   std::printf("%-8s %8s %7s %5s %8s | %6s %7s %6s %7s %9s %8s %7s | %7s %7s %7s\n", "family", "edges", "cells", "sing",
               "quads", "st1", "st2", "rej", "zero", "objective", "searches", "checks", "st1 s", "st2 s", "total s");
   for (const std::string family : {"torus", "planar", "polycube"}) {
+    if (!only.empty() && family != only) continue;
     for (int splits : {300, 1000, 3000, 10000, 30000, 60000}) {
       const TMesh tm = make(family, splits, 1);
       if (static_cast<int>(tm.edges.size()) > max_edges) break;

@@ -37,7 +37,8 @@ CellSystem::CellSystem(const TMesh& tmesh) : tmesh_(&tmesh) {
   for (int c = 0; c < C; ++c)
     for (int s = 0; s < 4; ++s) {
       const auto& side = tmesh.cells[c].sides[s];
-      if (side.empty()) invalid("cell " + std::to_string(c) + " has an empty side " + std::to_string(s));
+      if (side.empty())
+        invalid("cell " + std::to_string(c) + " is not four-sided (side " + std::to_string(s) + " is empty)");
       side_offset[4 * c + s + 1] = side_offset[4 * c + s] + static_cast<int>(side.size());
     }
   const int O = side_offset[4 * C];

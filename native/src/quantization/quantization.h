@@ -64,7 +64,8 @@ struct QuantizationResult {
 QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& options, Progress& progress);
 
 // Validity of a complete consistent quantization (§5.2 extended by §9.1): from every singular node
-// (index != 0, and every feature corner, the virtual singularities of §9.1) the set of points at
+// (index != 0, and every feature corner / boundary corner, including the virtual ones of §9.1,
+// i.e. TMeshNode::Kind FeatureCorner and BoundaryNode) the set of points at
 // zero parametric distance is explored; it must contain no other such node and no point of a
 // feature/boundary edge except the zero-length continuation of the node's own feature curves.
 struct QuantizationValidity {

@@ -483,9 +483,11 @@ TMesh build_patch_tmesh(const PatchLayout& layout, const std::vector<PatchRect>&
     node.index = is_corner[n] ? corner_index[n] : 0;
     const bool curve_corner =
         feature_edges > 0 && (feature_edges != 2 || (node.index == 0 && (feature_dirs[0] + 2) % 4 != feature_dirs[1]));
-    if (node.index != 0) node.kind = boundary_edges > 0 ? TMeshNode::Kind::FeatureCorner : TMeshNode::Kind::Singularity;
-    else if (curve_corner) node.kind = TMeshNode::Kind::FeatureCorner;
-    else if (boundary_edges > 0) node.kind = TMeshNode::Kind::BoundaryNode;
+    // Kinds as the tracer assigns them (tmesh/tmesh.h).
+    if (node.index != 0 || curve_corner)
+      node.kind = boundary_edges > 0 ? TMeshNode::Kind::BoundaryNode
+                  : node.on_feature  ? TMeshNode::Kind::FeatureCorner
+                                     : TMeshNode::Kind::Singularity;
     else node.kind = list.size() >= 4 ? TMeshNode::Kind::Crossing : TMeshNode::Kind::TJunction;
   }
   return tm;

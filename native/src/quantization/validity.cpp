@@ -12,7 +12,10 @@ ValidityChecker::ValidityChecker(const CellSystem& system) : sys_(system) {
   is_feature_point_.assign(N, 0);
   for (int n = 0; n < N; ++n) {
     const TMeshNode& node = tm.nodes[n];
-    is_singular_[n] = node.singular() || node.kind == TMeshNode::Kind::FeatureCorner;
+    // Singularities, feature corners (curve turns, ends, branches, virtual corners) and boundary
+    // corners / virtual boundary nodes: every node whose integer position the map must keep.
+    is_singular_[n] = node.singular() || node.kind == TMeshNode::Kind::FeatureCorner ||
+                      node.kind == TMeshNode::Kind::BoundaryNode;
     is_feature_point_[n] = node.on_feature;
     if (is_singular_[n]) singular_nodes_.push_back(n);
   }

@@ -7,7 +7,8 @@
 // offset t on side s lands at the mirrored offset on side s+2). Points are nodes or integer offsets
 // inside edges. The quantization is invalid if P0(i) contains another singular node or a point of a
 // feature/boundary edge other than the zero-length continuation of i's own feature curves.
-// "Singular" here means index != 0 or a feature corner (the virtual singularities of §9.1).
+// "Singular" here means index != 0, a feature corner or a boundary corner/virtual boundary node
+// (the corners and virtual singularities of §9.1, TMeshNode::Kind FeatureCorner/BoundaryNode).
 #pragma once
 #include <cstdint>
 #include <unordered_map>
