@@ -48,6 +48,7 @@ struct QuantizationResult {
   int64_t searches = 0;             // generating-vector searches run
   int64_t searched_nodes = 0;       // graph nodes labelled by all searches together
   int64_t validity_checks = 0;
+  int64_t validity_searches = 0;     // zero-distance searches from singular nodes (all checks)
   int64_t stage2_not_improving = 0;  // candidates whose generating vector does not improve
   double validity_seconds = 0;       // time spent in validity checks
   int64_t consistency_residual = 0;  // max |Ax| (0 for every result)

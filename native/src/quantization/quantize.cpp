@@ -82,7 +82,7 @@ class GreedyQuantizer {
     Timer total;
     stage1(r);
     r.stage1_seconds = total.seconds();
-    const QuantizationValidity v = validity_.check(x_);
+    const QuantizationValidity v = validity_.commit_full(x_);
     ++r.validity_checks;
     if (!v.valid)
       throw Error(ErrorCode::StageFailed, "quantization: no valid quantization reachable (" +
@@ -103,6 +103,7 @@ class GreedyQuantizer {
     r.quads_expected = quantization_quads(tmesh_, x_);
     r.searches = searches_;
     r.searched_nodes = search_.labelled_nodes();
+    r.validity_searches = validity_.searched_singularities();
     r.seconds = total.seconds();
     return r;
   }
@@ -229,7 +230,9 @@ class GreedyQuantizer {
       witness.clear();
       ++r.validity_checks;
       Timer check_timer;
-      const bool valid = validity_.check(x_, &witness).valid;
+      changed_edges_.clear();
+      for (const Change& c : changes_) changed_edges_.push_back(c.edge);
+      const bool valid = validity_.check_changed(x_, changed_edges_, &witness, true).valid;
       r.validity_seconds += check_timer.seconds();
       if (!valid) {
         apply_changes(-1);
@@ -290,7 +293,8 @@ class GreedyQuantizer {
   int64_t searches_ = 0;
   std::vector<int> dnodes_;
   std::vector<Change> changes_;
-  std::vector<int> change_index_;  // #edges: position in changes_ (valid if it points back)
+  std::vector<int> change_index_;
+  std::vector<int> changed_edges_;  // #edges: position in changes_ (valid if it points back)
   std::priority_queue<HeapEntry> heap_;
   std::vector<uint32_t> generation_;
   std::vector<std::vector<Dependency>> depends_;
