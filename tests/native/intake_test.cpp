@@ -171,6 +171,21 @@ TEST(Intake, RepairsOrientationDuplicatesAndPolygons) {
   EXPECT_EQ(r.components[0].boundary_loops, 1);
 }
 
+TEST(Intake, TriangulationAvoidsDiagonalsThatAreEdges) {
+  // A square whose 0-2 diagonal is already an edge of two other triangles: splitting the square
+  // along 0-2 would make that edge non-manifold, so 1-3 must be used even though 0-2 is better.
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {2, 2, 0}, {0, 1, 0}, {1, 1, 1}, {1, 1, -1}};
+  const int quad[4] = {0, 1, 2, 3}, t0[3] = {0, 2, 4}, t1[3] = {2, 0, 5};
+  s.add_face(quad, 4);
+  s.add_face(t0, 3);
+  s.add_face(t1, 3);
+  Progress progress;
+  const IntakeResult r = run_intake(s, IntakeOptions{}, progress);
+  EXPECT_EQ(repair_count(r, "triangulated_polygons"), 1);
+  EXPECT_EQ(r.mesh.num_faces(), 4);
+}
+
 TEST(Intake, RefusesNonOrientableMoebiusStrip) {
   PolygonSoup s;
   const int n = 8;

@@ -106,6 +106,27 @@ QGP_API int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64
 QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
                              int32_t* component, int32_t* input_vertex);
 
+/* The quad mesh of the last successful remesh job: counts, then vertices (nv x 3), quads
+ * (nq x 4 vertex indices, counter-clockwise) and per quad the input face it lies on (nq).
+ * QGP_ERR_NOT_READY when the last job produced no quad mesh. Any array may be null. */
+QGP_API int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_quads);
+QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads, int32_t* source_face);
+
+/* The integer-grid map of the last successful grid-UV or remesh job, per corner of the input
+ * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; NaN for triangles intake removed);
+ * cuts: the seam edges as input vertex pairs (num_cut_edges x 2). */
+QGP_API int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges);
+QGP_API int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts);
+
+/* Reading a mesh file as it is (polygons, no repair), e.g. to import it into Blender. */
+typedef struct qgp_soup qgp_soup;
+QGP_API int qgp_soup_read(const char* path, qgp_soup** out_soup);
+/* num_corners: total number of face corners (sum of face sizes). */
+QGP_API int qgp_soup_counts(qgp_soup* soup, int64_t* num_vertices, int64_t* num_faces, int64_t* num_corners);
+/* vertices: nv x 3; face_sizes: nf; corners: num_corners vertex indices, faces concatenated. */
+QGP_API int qgp_soup_fetch(qgp_soup* soup, double* vertices, int32_t* face_sizes, int32_t* corners);
+QGP_API void qgp_soup_free(qgp_soup* soup);
+
 #ifdef __cplusplus
 }
 #endif

@@ -17,6 +17,10 @@
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 
+struct qgp_soup {
+  qgp::PolygonSoup soup;
+};
+
 struct qgp_session {
   std::unique_ptr<qgp::Session> session;
   std::thread worker;
@@ -349,5 +353,99 @@ int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
     return QGP_OK;
   });
 }
+
+int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_quads) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::QuadMesh* quads = session->session->quad_result();
+    if (!quads) throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    if (num_vertices) *num_vertices = quads->V.rows();
+    if (num_quads) *num_quads = quads->Q.rows();
+    return QGP_OK;
+  });
+}
+
+int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads, int32_t* source_face) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::QuadMesh* q = session->session->quad_result();
+    if (!q) throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    if (vertices) std::memcpy(vertices, q->V.data(), sizeof(double) * 3 * q->V.rows());
+    if (quads) std::memcpy(quads, q->Q.data(), sizeof(int32_t) * 4 * q->Q.rows());
+    if (source_face) {
+      const auto& src = session->session->quad_source_face();
+      for (int i = 0; i < q->Q.rows(); ++i) source_face[i] = i < static_cast<int>(src.size()) ? src[i] : -1;
+    }
+    return QGP_OK;
+  });
+}
+
+int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    if (session->session->corner_uv().empty())
+      throw qgp::Error(qgp::ErrorCode::NotReady, "no grid UVs: run a grid-UV job first");
+    if (num_cut_edges) *num_cut_edges = static_cast<int64_t>(session->session->cut_edges().size());
+    return QGP_OK;
+  });
+}
+
+int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const std::vector<double>& corner_uv = session->session->corner_uv();
+    if (corner_uv.empty())
+      throw qgp::Error(qgp::ErrorCode::NotReady, "no grid UVs: run a grid-UV job first");
+    if (uv) std::copy(corner_uv.begin(), corner_uv.end(), uv);
+    if (cuts)
+      for (const auto& e : session->session->cut_edges()) {
+        *cuts++ = e[0];
+        *cuts++ = e[1];
+      }
+    return QGP_OK;
+  });
+}
+
+int qgp_soup_read(const char* path, qgp_soup** out_soup) {
+  return guarded(nullptr, [&] {
+    require(out_soup != nullptr, "out_soup is null");
+    *out_soup = nullptr;
+    require(path != nullptr, "path is null");
+    auto soup = std::make_unique<qgp_soup>();
+    soup->soup = qgp::read_mesh_file(path);
+    *out_soup = soup.release();
+    return QGP_OK;
+  });
+}
+
+int qgp_soup_counts(qgp_soup* soup, int64_t* num_vertices, int64_t* num_faces, int64_t* num_corners) {
+  return guarded(nullptr, [&] {
+    require(soup != nullptr, "soup is null");
+    if (num_vertices) *num_vertices = soup->soup.num_vertices();
+    if (num_faces) *num_faces = soup->soup.num_faces();
+    if (num_corners) *num_corners = static_cast<int64_t>(soup->soup.face_vertices.size());
+    return QGP_OK;
+  });
+}
+
+int qgp_soup_fetch(qgp_soup* soup, double* vertices, int32_t* face_sizes, int32_t* corners) {
+  return guarded(nullptr, [&] {
+    require(soup != nullptr, "soup is null");
+    const qgp::PolygonSoup& s = soup->soup;
+    if (vertices)
+      for (int v = 0; v < s.num_vertices(); ++v)
+        for (int k = 0; k < 3; ++k) vertices[3 * v + k] = s.positions[v][k];
+    if (face_sizes)
+      for (int f = 0; f < s.num_faces(); ++f) face_sizes[f] = s.face_size(f);
+    if (corners) std::copy(s.face_vertices.begin(), s.face_vertices.end(), corners);
+    return QGP_OK;
+  });
+}
+
+void qgp_soup_free(qgp_soup* soup) { delete soup; }
 
 }  // extern "C"

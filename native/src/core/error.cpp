@@ -12,6 +12,7 @@ const char* error_code_name(ErrorCode code) {
     case ErrorCode::Cancelled: return "cancelled";
     case ErrorCode::Busy: return "busy";
     case ErrorCode::Internal: return "internal";
+    case ErrorCode::NotReady: return "not_ready";
   }
   return "internal";
 }

@@ -14,6 +14,7 @@ enum class ErrorCode {
   Cancelled = 6,        // the caller cancelled the job
   Busy = 7,             // a job is already running on this session
   Internal = 8,         // a bug: an unexpected exception
+  NotReady = 9,         // no result of the requested kind is available
 };
 
 // Stable lower-case name used in JSON reports ("invalid_mesh", ...).

@@ -8,13 +8,15 @@ namespace qgp {
 
 void Progress::begin_stage(const std::string& stage) {
   stage_ = stage;
+  range_begin_ = 0, range_end_ = 1;
   check_cancel();
   if (callback_) callback_(stage_, 0.0);
 }
 
 void Progress::update(double fraction) {
   check_cancel();
-  if (callback_) callback_(stage_, std::clamp(fraction, 0.0, 1.0));
+  const double f = std::clamp(fraction, 0.0, 1.0);
+  if (callback_) callback_(stage_, range_begin_ + f * (range_end_ - range_begin_));
 }
 
 void Progress::check_cancel() const {

@@ -19,6 +19,9 @@ class Progress {
   void begin_stage(const std::string& stage);
   // Reports the fraction of the current stage done. Throws Error(Cancelled) if requested.
   void update(double fraction);
+  // Maps the fractions of later update() calls into [begin, end] of the current stage (e.g. one
+  // component's share of it); begin_stage() resets the range to [0, 1].
+  void set_range(double begin, double end) { range_begin_ = begin, range_end_ = end; }
   // Throws Error(Cancelled) if cancel was requested; call it often in loops (well below 1 s apart).
   void check_cancel() const;
   bool cancel_requested() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
@@ -28,6 +31,7 @@ class Progress {
   Callback callback_;
   const std::atomic<bool>* cancel_ = nullptr;
   std::string stage_;
+  double range_begin_ = 0, range_end_ = 1;
 };
 
 }  // namespace qgp

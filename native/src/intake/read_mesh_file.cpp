@@ -1,87 +1,26 @@
+// Bounds-checked OBJ / OFF / PLY readers. (OpenMesh's readers are not used for intake: the
+// Debian build asserts, i.e. aborts the host process, on malformed OBJ faces — found by fuzzing.
+// The tests compare these readers with OpenMesh on every shared mesh.)
 #include "intake/read_mesh_file.h"
 
-#include <OpenMesh/Core/IO/IOManager.hh>
-#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
-#include <OpenMesh/Core/System/omstream.hh>
-
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <mutex>
 #include <sstream>
+#include <string_view>
 
 #include "core/error.h"
 
 namespace qgp {
 namespace {
 
-using OpenMesh::IO::BaseImporter;
-namespace OM = OpenMesh;
-
-// Collects vertices and faces exactly as the file lists them (OpenMesh's own mesh kernels would
-// silently drop non-manifold faces, which intake must see and report).
-class SoupImporter final : public BaseImporter {
- public:
-  explicit SoupImporter(PolygonSoup& soup) : soup_(soup) {}
-
-  OM::VertexHandle add_vertex(const OM::Vec3f& p) override { return add_vertex(OM::Vec3d(p)); }
-  OM::VertexHandle add_vertex(const OM::Vec3d& p) override {
-    soup_.positions.emplace_back(p[0], p[1], p[2]);
-    return OM::VertexHandle(static_cast<int>(soup_.positions.size()) - 1);
-  }
-  OM::VertexHandle add_vertex() override { return add_vertex(OM::Vec3d(0, 0, 0)); }
-  OM::FaceHandle add_face(const VHandles& idx) override {
-    for (const auto& vh : idx) soup_.face_vertices.push_back(vh.idx());
-    soup_.face_start.push_back(static_cast<int>(soup_.face_vertices.size()));
-    return OM::FaceHandle(soup_.num_faces() - 1);
-  }
-  void set_point(OM::VertexHandle vh, const OM::Vec3f& p) override {
-    if (vh.idx() >= 0 && vh.idx() < soup_.num_vertices()) soup_.positions[vh.idx()] = Vec3(p[0], p[1], p[2]);
-  }
-  size_t n_vertices() const override { return soup_.positions.size(); }
-  size_t n_faces() const override { return static_cast<size_t>(soup_.num_faces()); }
-  size_t n_edges() const override { return 0; }
-
-  // Everything else a reader may hand over (normals, colours, texture data) is not needed.
-  OM::HalfedgeHandle add_edge(OM::VertexHandle, OM::VertexHandle) override { return OM::HalfedgeHandle(); }
-  OM::FaceHandle add_face(OM::HalfedgeHandle) override { return OM::FaceHandle(); }
-  void add_face_texcoords(OM::FaceHandle, OM::VertexHandle, const std::vector<OM::Vec2f>&) override {}
-  void add_face_texcoords(OM::FaceHandle, OM::VertexHandle, const std::vector<OM::Vec3f>&) override {}
-  void set_face_texindex(OM::FaceHandle, int) override {}
-  void set_halfedge(OM::VertexHandle, OM::HalfedgeHandle) override {}
-  void set_normal(OM::VertexHandle, const OM::Vec3f&) override {}
-  void set_normal(OM::VertexHandle, const OM::Vec3d&) override {}
-  void set_color(OM::VertexHandle, const OM::Vec3uc&) override {}
-  void set_color(OM::VertexHandle, const OM::Vec4uc&) override {}
-  void set_color(OM::VertexHandle, const OM::Vec3f&) override {}
-  void set_color(OM::VertexHandle, const OM::Vec4f&) override {}
-  void set_texcoord(OM::VertexHandle, const OM::Vec2f&) override {}
-  void set_status(OM::VertexHandle, const OM::Attributes::StatusInfo&) override {}
-  void set_next(OM::HalfedgeHandle, OM::HalfedgeHandle) override {}
-  void set_face(OM::HalfedgeHandle, OM::FaceHandle) override {}
-  void request_face_texcoords2D() override {}
-  void set_texcoord(OM::HalfedgeHandle, const OM::Vec2f&) override {}
-  void set_texcoord(OM::VertexHandle, const OM::Vec3f&) override {}
-  void set_texcoord(OM::HalfedgeHandle, const OM::Vec3f&) override {}
-  void set_status(OM::HalfedgeHandle, const OM::Attributes::StatusInfo&) override {}
-  void set_color(OM::EdgeHandle, const OM::Vec3uc&) override {}
-  void set_color(OM::EdgeHandle, const OM::Vec4uc&) override {}
-  void set_color(OM::EdgeHandle, const OM::Vec3f&) override {}
-  void set_color(OM::EdgeHandle, const OM::Vec4f&) override {}
-  void set_status(OM::EdgeHandle, const OM::Attributes::StatusInfo&) override {}
-  void set_normal(OM::FaceHandle, const OM::Vec3f&) override {}
-  void set_normal(OM::FaceHandle, const OM::Vec3d&) override {}
-  void set_color(OM::FaceHandle, const OM::Vec3uc&) override {}
-  void set_color(OM::FaceHandle, const OM::Vec4uc&) override {}
-  void set_color(OM::FaceHandle, const OM::Vec3f&) override {}
-  void set_color(OM::FaceHandle, const OM::Vec4f&) override {}
-  void set_status(OM::FaceHandle, const OM::Attributes::StatusInfo&) override {}
-  void add_texture_information(int, std::string) override {}
-
- private:
-  PolygonSoup& soup_;
-};
+[[noreturn]] void unreadable(const std::string& path, const std::string& why) {
+  throw Error(ErrorCode::UnreadableFile, "cannot read '" + path + "': " + why);
+}
 
 std::string lower_extension(const std::string& path) {
   const auto dot = path.find_last_of('.');
@@ -92,12 +31,181 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-[[noreturn]] void unreadable(const std::string& path, const std::string& why) {
-  throw Error(ErrorCode::UnreadableFile, "cannot read '" + path + "': " + why);
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) unreadable(path, "file does not exist or is not readable");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
-// ---- PLY header and triangle-strip reader (OpenMesh's PLY reader knows only face lists) ----
+// Splits text into lines (handles \n, \r\n and \r) and whitespace-separated tokens.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+  // Next line without its terminator; false at the end.
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    size_t end = pos_;
+    while (end < text_.size() && text_[end] != '\n' && text_[end] != '\r') ++end;
+    line = text_.substr(pos_, end - pos_);
+    pos_ = end;
+    if (pos_ < text_.size() && text_[pos_] == '\r') ++pos_;
+    if (pos_ < text_.size() && text_[pos_] == '\n') ++pos_;
+    ++number_;
+    return true;
+  }
+  size_t line_number() const { return number_; }
+  size_t position() const { return pos_; }
 
+ private:
+  std::string_view text_;
+  size_t pos_ = 0, number_ = 0;
+};
+
+bool next_token(std::string_view& line, std::string_view& token) {
+  size_t i = 0;
+  while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+  if (i == line.size()) return false;
+  size_t j = i;
+  while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+  token = line.substr(i, j - i);
+  line = line.substr(j);
+  return true;
+}
+
+bool parse_double(std::string_view token, double& value) {
+  if (token.empty() || token.size() > 64) return false;
+  char buffer[65];
+  std::memcpy(buffer, token.data(), token.size());
+  buffer[token.size()] = '\0';
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtod(buffer, &end);
+  return end == buffer + token.size();
+}
+
+bool parse_long(std::string_view token, long long& value) {
+  if (token.empty() || token.size() > 20) return false;
+  char buffer[21];
+  std::memcpy(buffer, token.data(), token.size());
+  buffer[token.size()] = '\0';
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtoll(buffer, &end, 10);
+  return end == buffer + token.size() && errno == 0;
+}
+
+std::string at_line(size_t n) { return "line " + std::to_string(n) + ": "; }
+
+// ---- OBJ: v / f records; texture and normal references, groups, materials are ignored ----
+PolygonSoup read_obj(const std::string& path, const std::string& text) {
+  PolygonSoup soup;
+  LineReader lines(text);
+  std::string_view line, token;
+  std::vector<int> face;
+  std::string joined;
+  while (lines.next(line)) {
+    // Backslash continuation.
+    while (!line.empty() && line.back() == '\\') {
+      joined.assign(line.substr(0, line.size() - 1));
+      std::string_view more;
+      if (!lines.next(more)) break;
+      joined.append(" ").append(more);
+      line = joined;
+    }
+    std::string_view rest = line;
+    if (!next_token(rest, token)) continue;
+    if (token == "v") {
+      Vec3 p;
+      for (int k = 0; k < 3; ++k) {
+        std::string_view t;
+        if (!next_token(rest, t) || !parse_double(t, p[k]))
+          unreadable(path, at_line(lines.line_number()) + "a vertex needs three numbers");
+      }
+      soup.positions.push_back(p);
+    } else if (token == "f") {
+      face.clear();
+      while (next_token(rest, token)) {
+        const std::string_view index_text = token.substr(0, token.find('/'));
+        long long index = 0;
+        if (!parse_long(index_text, index) || index == 0)
+          unreadable(path, at_line(lines.line_number()) + "bad vertex reference '" + std::string(token) + "'");
+        // Negative indices count back from the last vertex read so far.
+        const long long resolved = index > 0 ? index - 1 : static_cast<long long>(soup.positions.size()) + index;
+        if (resolved < 0 || resolved > INT32_MAX)
+          unreadable(path, at_line(lines.line_number()) + "vertex reference " + std::to_string(index) + " out of range");
+        face.push_back(static_cast<int>(resolved));
+      }
+      if (face.size() < 3)
+        unreadable(path, at_line(lines.line_number()) + "a face needs at least three vertices");
+      soup.add_face(face.data(), static_cast<int>(face.size()));
+    }
+  }
+  return soup;
+}
+
+// ---- OFF: [C][N][ST]OFF header, counts, vertex lines, face lines "n i0 .. in-1 [colour]" ----
+PolygonSoup read_off(const std::string& path, const std::string& text) {
+  PolygonSoup soup;
+  LineReader lines(text);
+  std::string_view line, token;
+  // Meaningful lines: comments (#...) and blank lines are skipped.
+  auto next_content = [&](std::string_view& out) {
+    while (lines.next(out)) {
+      const auto hash = out.find('#');
+      if (hash != std::string_view::npos) out = out.substr(0, hash);
+      std::string_view probe = out;
+      if (next_token(probe, token)) return true;
+    }
+    return false;
+  };
+  if (!next_content(line) || !next_token(line, token) || token.size() < 3 ||
+      token.substr(token.size() - 3) != "OFF")
+    unreadable(path, "not an OFF file (no OFF header)");
+  if (token.find("4") != std::string_view::npos || token.find("n") == 0)
+    unreadable(path, "OFF variant '" + std::string(token) + "' (higher dimension) is not supported");
+  std::string_view counts = line;
+  long long nv = 0, nf = 0;
+  if (!next_token(counts, token)) {
+    if (!next_content(line)) unreadable(path, "missing vertex and face counts");
+    counts = line;
+    next_token(counts, token);
+  }
+  if (!parse_long(token, nv) || !next_token(counts, token) || !parse_long(token, nf) || nv < 0 || nf < 0)
+    unreadable(path, at_line(lines.line_number()) + "bad vertex/face counts");
+  // Every record needs at least a few bytes: reject counts the file cannot hold.
+  if (static_cast<double>(nv) * 6 + static_cast<double>(nf) * 8 > static_cast<double>(text.size()) + 64)
+    unreadable(path, "the header announces " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                         " faces, more than the file holds (truncated?)");
+  soup.positions.reserve(static_cast<size_t>(nv));
+  for (long long v = 0; v < nv; ++v) {
+    if (!next_content(line)) unreadable(path, "file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
+    Vec3 p;
+    for (int k = 0; k < 3; ++k)
+      if (!next_token(line, token) || !parse_double(token, p[k]))
+        unreadable(path, at_line(lines.line_number()) + "a vertex needs three numbers");
+    soup.positions.push_back(p);
+  }
+  std::vector<int> face;
+  for (long long f = 0; f < nf; ++f) {
+    if (!next_content(line)) unreadable(path, "file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+    long long n = 0;
+    if (!next_token(line, token) || !parse_long(token, n) || n < 3 || n > 100000)
+      unreadable(path, at_line(lines.line_number()) + "bad face size");
+    face.clear();
+    for (long long k = 0; k < n; ++k) {
+      long long index = 0;
+      if (!next_token(line, token) || !parse_long(token, index) || index < INT32_MIN || index > INT32_MAX)
+        unreadable(path, at_line(lines.line_number()) + "a face needs " + std::to_string(n) + " vertex indices");
+      face.push_back(static_cast<int>(index));
+    }
+    soup.add_face(face.data(), static_cast<int>(face.size()));
+  }
+  return soup;
+}
+
+// ---- PLY: ascii / binary little / big endian; vertex x y z; face lists or triangle strips ----
 struct PlyProperty {
   std::string name, type;  // scalar type, or the item type of a list
   bool is_list = false;
@@ -108,11 +216,6 @@ struct PlyElement {
   long long count = 0;
   std::vector<PlyProperty> properties;
 };
-struct PlyHeader {
-  std::string format;  // ascii | binary_little_endian | binary_big_endian
-  std::vector<PlyElement> elements;
-  std::streampos data_start;
-};
 
 int ply_type_size(const std::string& t) {
   if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
@@ -122,56 +225,27 @@ int ply_type_size(const std::string& t) {
   return 0;
 }
 
-PlyHeader read_ply_header(std::istream& in, const std::string& path) {
-  PlyHeader header;
-  std::string line;
-  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) unreadable(path, "not a PLY file (no 'ply' magic)");
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string word;
-    ls >> word;
-    if (word == "format") {
-      ls >> header.format;
-    } else if (word == "element") {
-      PlyElement e;
-      ls >> e.name >> e.count;
-      if (!ls || e.count < 0) unreadable(path, "malformed PLY element line '" + line + "'");
-      header.elements.push_back(e);
-    } else if (word == "property") {
-      if (header.elements.empty()) unreadable(path, "PLY property before any element");
-      PlyProperty p;
-      ls >> p.type;
-      if (p.type == "list") {
-        p.is_list = true;
-        ls >> p.count_type >> p.type;
-      }
-      ls >> p.name;
-      if (!ls || ply_type_size(p.type) == 0 || (p.is_list && ply_type_size(p.count_type) == 0))
-        unreadable(path, "unsupported PLY property '" + line + "'");
-      header.elements.back().properties.push_back(p);
-    } else if (word == "end_header") {
-      header.data_start = in.tellg();
-      return header;
-    }
-  }
-  unreadable(path, "PLY header has no end_header");
-}
-
-class PlyValueReader {
+class PlyData {
  public:
-  PlyValueReader(std::istream& in, const std::string& format, const std::string& path)
-      : in_(in), ascii_(format == "ascii"), swap_(format == "binary_big_endian"), path_(path) {}
+  PlyData(const std::string& text, size_t start, const std::string& format, const std::string& path)
+      : text_(text), pos_(start), ascii_(format == "ascii"), swap_(format == "binary_big_endian"), path_(path) {}
 
   double read(const std::string& type) {
     if (ascii_) {
+      while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+      size_t end = pos_;
+      while (end < text_.size() && !std::isspace(static_cast<unsigned char>(text_[end]))) ++end;
       double v;
-      if (!(in_ >> v)) unreadable(path_, "PLY data ends early or holds a non-number");
+      if (pos_ == end || !parse_double(std::string_view(text_).substr(pos_, end - pos_), v))
+        unreadable(path_, "PLY data ends early or holds a non-number");
+      pos_ = end;
       return v;
     }
     const int n = ply_type_size(type);
+    if (pos_ + n > text_.size()) unreadable(path_, "PLY data ends early (truncated file)");
     unsigned char b[8];
-    if (!in_.read(reinterpret_cast<char*>(b), n)) unreadable(path_, "PLY data ends early");
+    std::memcpy(b, text_.data() + pos_, n);
+    pos_ += n;
     if (swap_) std::reverse(b, b + n);
     if (type == "char" || type == "int8") return static_cast<int8_t>(b[0]);
     if (type == "uchar" || type == "uint8") return b[0];
@@ -184,15 +258,18 @@ class PlyValueReader {
     std::memcpy(&v, b, 8);
     return v;
   }
+  size_t remaining() const { return text_.size() - pos_; }
+  bool ascii() const { return ascii_; }
 
  private:
-  std::istream& in_;
+  const std::string& text_;
+  size_t pos_;
   bool ascii_, swap_;
   const std::string& path_;
 };
 
-// Appends the triangles of one strip; strips alternate orientation and use repeated indices
-// (zero-area "swap" triangles) as connectors, which are skipped.
+// Triangles of one strip; strips alternate orientation and use repeated indices (zero-area
+// "swap" triangles) as connectors, which are skipped.
 void append_strip(const std::vector<int>& strip, PolygonSoup& soup) {
   for (size_t i = 2; i < strip.size(); ++i) {
     int tri[3] = {strip[i - 2], strip[i - 1], strip[i]};
@@ -202,84 +279,123 @@ void append_strip(const std::vector<int>& strip, PolygonSoup& soup) {
   }
 }
 
-PolygonSoup read_ply_tristrips(std::istream& in, const PlyHeader& header, const std::string& path) {
+PolygonSoup read_ply(const std::string& path, const std::string& text) {
+  LineReader lines(text);
+  std::string_view line, token;
+  if (!lines.next(line) || line != "ply") unreadable(path, "not a PLY file (no 'ply' magic)");
+  std::string format;
+  std::vector<PlyElement> elements;
+  bool header_done = false;
+  while (!header_done && lines.next(line)) {
+    std::string_view rest = line;
+    if (!next_token(rest, token)) continue;
+    if (token == "format") {
+      if (next_token(rest, token)) format = std::string(token);
+    } else if (token == "element") {
+      PlyElement e;
+      long long count = -1;
+      if (!next_token(rest, token)) unreadable(path, "malformed PLY element line");
+      e.name = std::string(token);
+      if (!next_token(rest, token) || !parse_long(token, count) || count < 0)
+        unreadable(path, "malformed PLY element line '" + std::string(line) + "'");
+      e.count = count;
+      elements.push_back(e);
+    } else if (token == "property") {
+      if (elements.empty()) unreadable(path, "PLY property before any element");
+      PlyProperty p;
+      std::vector<std::string> words;
+      while (next_token(rest, token)) words.emplace_back(token);
+      if (words.size() == 4 && words[0] == "list") {
+        p.is_list = true;
+        p.count_type = words[1];
+        p.type = words[2];
+        p.name = words[3];
+      } else if (words.size() == 2) {
+        p.type = words[0];
+        p.name = words[1];
+      } else {
+        unreadable(path, "malformed PLY property '" + std::string(line) + "'");
+      }
+      if (ply_type_size(p.type) == 0 || (p.is_list && ply_type_size(p.count_type) == 0))
+        unreadable(path, "unsupported PLY property type in '" + std::string(line) + "'");
+      elements.back().properties.push_back(p);
+    } else if (token == "end_header") {
+      header_done = true;
+    }
+  }
+  if (!header_done) unreadable(path, "PLY header has no end_header");
+  if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+    unreadable(path, "unknown PLY format '" + format + "'");
+  bool has_faces = false;
+  for (const PlyElement& e : elements) has_faces |= (e.name == "face" || e.name == "tristrips") && e.count > 0;
+  if (!has_faces) unreadable(path, "PLY file has no 'face' or 'tristrips' element");
+
   PolygonSoup soup;
-  PlyValueReader reader(in, header.format, path);
-  for (const PlyElement& element : header.elements) {
+  PlyData data(text, lines.position(), format, path);
+  std::vector<int> list;
+  for (const PlyElement& element : elements) {
+    // Each record takes at least one byte: reject counts the file cannot hold.
+    if (static_cast<double>(element.count) > static_cast<double>(data.remaining()) + 1)
+      unreadable(path, "PLY element '" + element.name + "' announces " + std::to_string(element.count) +
+                           " records, more than the file holds (truncated?)");
     const bool is_vertex = element.name == "vertex";
+    const bool is_face = element.name == "face";
     const bool is_strips = element.name == "tristrips";
     if (is_vertex) soup.positions.reserve(static_cast<size_t>(element.count));
     for (long long i = 0; i < element.count; ++i) {
       Vec3 p(0, 0, 0);
-      std::vector<int> strip;
       for (const PlyProperty& prop : element.properties) {
-        if (prop.is_list) {
-          const double n = reader.read(prop.count_type);
-          if (n < 0 || n > 1e9) unreadable(path, "PLY list length out of range");
-          const long long count = static_cast<long long>(n);
-          for (long long k = 0; k < count; ++k) {
-            const double idx = reader.read(prop.type);
-            if (!is_strips || prop.name != "vertex_indices") continue;
-            if (idx < 0) {  // -1 restarts the strip
-              append_strip(strip, soup);
-              strip.clear();
-            } else {
-              strip.push_back(static_cast<int>(idx));
-            }
-          }
-        } else {
-          const double v = reader.read(prop.type);
+        if (!prop.is_list) {
+          const double v = data.read(prop.type);
           if (is_vertex) {
             if (prop.name == "x") p.x() = v;
             else if (prop.name == "y") p.y() = v;
             else if (prop.name == "z") p.z() = v;
           }
+          continue;
+        }
+        const double n = data.read(prop.count_type);
+        if (!(n >= 0) || n > static_cast<double>(data.remaining()) + 1)
+          unreadable(path, "PLY list length out of range");
+        const bool indices = (is_face || is_strips) && (prop.name == "vertex_indices" || prop.name == "vertex_index");
+        list.clear();
+        for (long long k = 0; k < static_cast<long long>(n); ++k) {
+          const double idx = data.read(prop.type);
+          if (!indices) continue;
+          if (!(idx >= INT32_MIN && idx <= INT32_MAX) || idx != std::floor(idx))
+            unreadable(path, "PLY vertex index out of range");
+          if (is_strips && idx < 0) {  // -1 restarts the strip
+            append_strip(list, soup);
+            list.clear();
+          } else {
+            list.push_back(static_cast<int>(idx));
+          }
+        }
+        if (!indices) continue;
+        if (is_strips) {
+          append_strip(list, soup);
+        } else {
+          if (list.size() < 3) unreadable(path, "a PLY face needs at least three vertices");
+          soup.add_face(list.data(), static_cast<int>(list.size()));
         }
       }
       if (is_vertex) soup.positions.push_back(p);
-      if (is_strips) append_strip(strip, soup);
     }
   }
-  return soup;
-}
-
-PolygonSoup read_with_openmesh(const std::string& path) {
-  static std::mutex openmesh_mutex;  // OpenMesh's IO manager is a process-wide singleton
-  std::lock_guard<std::mutex> lock(openmesh_mutex);
-  omerr().disable();
-  omlog().disable();
-  omout().disable();
-  PolygonSoup soup;
-  SoupImporter importer(soup);
-  OpenMesh::IO::Options options;
-  if (!OpenMesh::IO::IOManager().read(path, importer, options))
-    unreadable(path, "the " + lower_extension(path).substr(1) + " reader could not parse it");
   return soup;
 }
 
 }  // namespace
 
 PolygonSoup read_mesh_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) unreadable(path, "file does not exist or is not readable");
   const std::string ext = lower_extension(path);
-  if (ext != ".obj" && ext != ".ply" && ext != ".off")
+  if (ext != ".obj" && ext != ".ply" && ext != ".off") {
+    std::ifstream probe(path);
+    if (!probe) unreadable(path, "file does not exist or is not readable");
     unreadable(path, "unsupported extension '" + ext + "' (supported: .obj, .ply, .off)");
-  if (ext == ".ply") {
-    const PlyHeader header = read_ply_header(in, path);
-    bool has_faces = false, has_strips = false;
-    for (const PlyElement& e : header.elements) {
-      has_faces |= e.name == "face" && e.count > 0;
-      has_strips |= e.name == "tristrips" && e.count > 0;
-    }
-    if (has_strips && !has_faces) {
-      in.seekg(header.data_start);
-      return read_ply_tristrips(in, header, path);
-    }
-    if (!has_faces) unreadable(path, "PLY file has no 'face' or 'tristrips' element");
   }
-  in.close();
-  PolygonSoup soup = read_with_openmesh(path);
+  const std::string text = read_all(path);
+  PolygonSoup soup = ext == ".obj" ? read_obj(path, text) : ext == ".off" ? read_off(path, text) : read_ply(path, text);
   if (soup.num_faces() == 0) unreadable(path, "the file holds no faces");
   return soup;
 }

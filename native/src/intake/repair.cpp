@@ -7,6 +7,7 @@
 #include <numeric>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/error.h"
 
@@ -58,7 +59,19 @@ double triangle_area(const TriangleSoup& soup, int t) {
 }
 
 // Ear clipping of one polygon projected onto its Newell plane; falls back to a fan.
-void triangulate_polygon(const PolygonSoup& soup, int f, std::vector<std::array<int, 3>>& out) {
+// Smallest corner angle of triangle (a, b, c).
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto angle = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 u = q - p, v = r - p;
+    return std::atan2(u.cross(v).norm(), u.dot(v));
+  };
+  return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+}
+
+// Ear clipping of one polygon projected onto its Newell plane; falls back to a fan. Diagonals
+// that are already edges of the mesh (`existing`) are avoided: they would be non-manifold.
+void triangulate_polygon(const PolygonSoup& soup, int f, const std::unordered_set<uint64_t>& existing,
+                         std::vector<std::array<int, 3>>& out) {
   const int n = soup.face_size(f);
   const int* idx = &soup.face_vertices[soup.face_start[f]];
   Vec3 normal = Vec3::Zero();
@@ -71,6 +84,21 @@ void triangulate_polygon(const PolygonSoup& soup, int f, std::vector<std::array<
   auto fan = [&] {
     for (int i = 1; i + 1 < n; ++i) out.push_back({idx[0], idx[i], idx[i + 1]});
   };
+  if (n == 4) {  // the better-shaped diagonal that is not an existing edge
+    const Vec3* p[4];
+    for (int i = 0; i < 4; ++i) p[i] = &soup.positions[idx[i]];
+    const double q02 = std::min(min_angle(*p[0], *p[1], *p[2]), min_angle(*p[0], *p[2], *p[3]));
+    const double q13 = std::min(min_angle(*p[1], *p[2], *p[3]), min_angle(*p[1], *p[3], *p[0]));
+    const bool ok02 = !existing.count(edge_key(idx[0], idx[2])), ok13 = !existing.count(edge_key(idx[1], idx[3]));
+    if ((ok13 && !ok02) || (ok13 == ok02 && q13 > q02)) {
+      out.push_back({idx[1], idx[2], idx[3]});
+      out.push_back({idx[1], idx[3], idx[0]});
+    } else {
+      out.push_back({idx[0], idx[1], idx[2]});
+      out.push_back({idx[0], idx[2], idx[3]});
+    }
+    return;
+  }
   if (normal.norm() == 0) return fan();
   normal.normalize();
   const Vec3 ax = (std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(normal).normalized();
@@ -86,8 +114,9 @@ void triangulate_polygon(const PolygonSoup& soup, int f, std::vector<std::array<
   while (ring.size() > 3) {
     const int m = static_cast<int>(ring.size());
     bool clipped = false;
-    for (int i = 0; i < m && !clipped; ++i) {
-      const int a = ring[(i + m - 1) % m], b = ring[i], c = ring[(i + 1) % m];
+    for (int i = 0; i < 2 * m && !clipped; ++i) {  // first pass: only ears with a new diagonal
+      const int a = ring[(i + m - 1) % m], b = ring[i % m], c = ring[(i + 1) % m];
+      if (i < m && m > 3 && existing.count(edge_key(idx[a], idx[c]))) continue;
       if (cross(p[a], p[b], p[c]) <= 0) continue;  // reflex or flat corner
       bool empty = true;
       for (int j : ring) {
@@ -99,7 +128,7 @@ void triangulate_polygon(const PolygonSoup& soup, int f, std::vector<std::array<
       }
       if (!empty) continue;
       tris.push_back({idx[a], idx[b], idx[c]});
-      ring.erase(ring.begin() + i);
+      ring.erase(ring.begin() + i % m);
       clipped = true;
     }
     if (!clipped) return fan();  // self-intersecting or degenerate polygon
@@ -144,6 +173,19 @@ int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out) {
   out.triangles.clear();
   out.input_face.clear();
   out.triangles.reserve(soup.num_faces());
+  std::unordered_set<uint64_t> existing;  // polygon sides, for diagonal choices
+  for (int f = 0; f < soup.num_faces(); ++f) {
+    const int n = soup.face_size(f);
+    if (n == 3) continue;
+    const int* idx = &soup.face_vertices[soup.face_start[f]];
+    for (int i = 0; i < n; ++i) existing.insert(edge_key(idx[i], idx[(i + 1) % n]));
+  }
+  if (!existing.empty())  // triangles' sides count too
+    for (int f = 0; f < soup.num_faces(); ++f) {
+      if (soup.face_size(f) != 3) continue;
+      const int* idx = &soup.face_vertices[soup.face_start[f]];
+      for (int i = 0; i < 3; ++i) existing.insert(edge_key(idx[i], idx[(i + 1) % 3]));
+    }
   int polygons = 0;
   for (int f = 0; f < soup.num_faces(); ++f) {
     const size_t before = out.triangles.size();
@@ -151,7 +193,7 @@ int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out) {
       const int* idx = &soup.face_vertices[soup.face_start[f]];
       out.triangles.push_back({idx[0], idx[1], idx[2]});
     } else {
-      triangulate_polygon(soup, f, out.triangles);
+      triangulate_polygon(soup, f, existing, out.triangles);
       ++polygons;
     }
     out.input_face.resize(out.triangles.size(), f);

@@ -2,10 +2,14 @@
 // the target density re-runs quantization and later stages, nothing before them.
 #pragma once
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/json.h"
 #include "core/progress.h"
+#include "core/quad_mesh.h"
+#include "cross_field/cross_field.h"
+#include "cut_graph/cut_graph.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
@@ -19,7 +23,9 @@ struct ComponentState {
   TriMesh mesh;                     // the component as its own mesh
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
   std::vector<int> face_map;        // component face -> intake mesh face
-  std::vector<char> feature_edges;  // #E of `mesh`: caller's feature edges
+  std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
+  std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
+  std::optional<CutGraph> cut;      // stage 1b
 };
 
 class Session {
@@ -43,16 +49,32 @@ class Session {
   // Target quad edge length in model units, from the options and the total surface area.
   double target_edge_length() const;
 
+  // Results of the last successful job (null / empty when there is none).
+  // Quad mesh over all components; quad_source_face: per quad the input face it lies on.
+  const QuadMesh* quad_result() const { return quads_ ? quads_.get() : nullptr; }
+  const std::vector<int>& quad_source_face() const { return quad_source_face_; }
+  // Integer-grid map per input triangle corner (#input faces x 3 x 2, 1 unit = 1 quad; NaN where
+  // intake removed the face) and the cut edges as input vertex pairs.
+  const std::vector<double>& corner_uv() const { return corner_uv_; }
+  const std::vector<std::array<int, 2>>& cut_edges() const { return cut_edges_; }
+
  private:
   void run_intake_stage(Progress& progress);
   void prepare_components();
+  void report_component_preparation();
   void run_remesh_stages(Job job, Progress& progress);
+  void run_field_stages(Progress& progress);
 
   PolygonSoup input_;
   RemeshOptions options_;
   std::unique_ptr<IntakeResult> intake_;
   std::vector<ComponentState> components_;
+  int split_faces_ = 0, unmatched_features_ = 0;
   Json report_;
+  std::unique_ptr<QuadMesh> quads_;
+  std::vector<int> quad_source_face_;
+  std::vector<double> corner_uv_;
+  std::vector<std::array<int, 2>> cut_edges_;
 };
 
 }  // namespace qgp

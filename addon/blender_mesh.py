@@ -1,0 +1,105 @@
+"""Blender glue: reading a mesh object's data for the native library and writing results back."""
+import bpy
+import numpy as np
+
+from .core import meshdata
+
+
+def sharp_edge_flags(mesh):
+    """Marked-sharp flag per edge: the 'sharp_edge' attribute (Blender 4.1+) or use_edge_sharp (3.x)."""
+    flags = np.zeros(len(mesh.edges), bool)
+    attribute = mesh.attributes.get("sharp_edge")
+    if attribute is not None and attribute.domain == "EDGE" and attribute.data_type == "BOOLEAN":
+        attribute.data.foreach_get("value", flags)
+    elif len(mesh.edges) and hasattr(mesh.edges[0], "use_edge_sharp"):
+        mesh.edges.foreach_get("use_edge_sharp", flags)
+    return flags
+
+
+class SourceMesh:
+    """Arrays of a mesh object for the native library: vertices (object space), triangles, the
+    loop of every triangle corner, the polygon of every triangle, and marked-sharp edges."""
+
+    def __init__(self, context, obj, evaluated, use_marked_sharp):
+        if evaluated:
+            evaluated_obj = obj.evaluated_get(context.evaluated_depsgraph_get())
+            mesh = evaluated_obj.to_mesh()
+        else:
+            evaluated_obj, mesh = None, obj.data
+        try:
+            self.vertices, self.triangles, self.triangle_loops = meshdata.mesh_arrays(mesh)
+            polys = np.empty(len(mesh.loop_triangles), np.int32)
+            mesh.loop_triangles.foreach_get("polygon_index", polys)
+            self.triangle_polygon = polys
+            materials = np.zeros(len(mesh.polygons), np.int32)
+            mesh.polygons.foreach_get("material_index", materials)
+            self.polygon_material = materials
+            self.num_loops = len(mesh.loops)
+            self.features = (meshdata.edge_vertex_pairs(mesh, sharp_edge_flags(mesh)) if use_marked_sharp
+                             else np.zeros((0, 2), np.int32))
+            edges = np.empty(2 * len(mesh.edges), np.int32)
+            mesh.edges.foreach_get("vertices", edges)
+            self.edges = edges.reshape(-1, 2)
+        finally:
+            if evaluated_obj is not None:
+                evaluated_obj.to_mesh_clear()
+
+    def fingerprint(self):
+        """Identifies the geometry, so a cached native session is reused only for the same mesh."""
+        return hash((self.vertices.tobytes(), self.triangles.tobytes(), self.features.tobytes()))
+
+
+def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh):
+    """New object '<source>_quads' with the source's transform, parent, collections and materials."""
+    name = source.name + "_quads"
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices.tolist(), [], quads.tolist())
+    for slot in source.material_slots:
+        mesh.materials.append(slot.material)
+    if len(source.material_slots) > 1 and len(quads):
+        tri = np.clip(quad_triangle, 0, len(source_mesh.triangle_polygon) - 1)
+        index = source_mesh.polygon_material[source_mesh.triangle_polygon[tri]]
+        mesh.polygons.foreach_set("material_index", index.astype(np.int32))
+    mesh.update(calc_edges=True)
+    mesh.validate(clean_customdata=False)
+    obj = bpy.data.objects.new(name, mesh)
+    obj.parent = source.parent
+    obj.matrix_parent_inverse = source.matrix_parent_inverse.copy()
+    obj.matrix_basis = source.matrix_basis.copy()
+    collections = source.users_collection or (context.scene.collection,)
+    for collection in collections:
+        collection.objects.link(obj)
+    for other in context.selected_objects:
+        other.select_set(False)
+    obj.select_set(True)
+    context.view_layer.objects.active = obj
+    return obj
+
+
+def write_grid_uvs(mesh, source_mesh, corner_uv, quads_per_unit, layer_name="QGP Grid"):
+    """Writes per-loop UVs (corner_uv: (triangles, 3, 2), 1 unit = 1 quad) scaled to
+    `quads_per_unit` quads per UV unit into the layer `layer_name` (created if needed)."""
+    loop_uv = np.zeros((source_mesh.num_loops, 2), np.float32)
+    flat_loops = source_mesh.triangle_loops.reshape(-1)
+    flat_uv = corner_uv.reshape(-1, 2) / float(quads_per_unit)
+    valid = np.isfinite(flat_uv).all(axis=1)
+    loop_uv[flat_loops[valid]] = flat_uv[valid]
+    layer = mesh.uv_layers.get(layer_name) or mesh.uv_layers.new(name=layer_name)
+    layer.data.foreach_set("uv", loop_uv.reshape(-1))
+    mesh.uv_layers.active = layer
+    return layer
+
+
+def mark_seams(mesh, source_mesh, cut_pairs):
+    """Marks the edges listed as vertex pairs (k, 2) as seams. Returns how many were marked."""
+    index = {(min(a, b), max(a, b)): e for e, (a, b) in enumerate(source_mesh.edges.tolist())}
+    seams = np.zeros(len(mesh.edges), bool)
+    mesh.edges.foreach_get("use_seam", seams)
+    marked = 0
+    for a, b in cut_pairs.tolist():
+        e = index.get((min(a, b), max(a, b)))
+        if e is not None:
+            seams[e] = True
+            marked += 1
+    mesh.edges.foreach_set("use_seam", seams)
+    return marked

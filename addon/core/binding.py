@@ -1,0 +1,276 @@
+"""ctypes binding of the native C API (native/include/qgp/qgp.h).
+
+Session wraps one native session: create it from numpy arrays (or a file), set options, start a
+job on the native worker thread, poll / cancel / wait, then fetch results and the JSON report.
+Every native failure raises QGPError carrying the native status code and message.
+"""
+import ctypes
+import json
+import os
+
+import numpy as np
+
+# Status codes (qgp_status).
+OK = 0
+ERR_INVALID_ARGUMENT = 1
+ERR_INVALID_MESH = 2
+ERR_UNREADABLE_FILE = 3
+ERR_NOT_BUILT = 4
+ERR_STAGE_FAILED = 5
+ERR_CANCELLED = 6
+ERR_BUSY = 7
+ERR_INTERNAL = 8
+ERR_NOT_READY = 9
+
+# Jobs (qgp_job) and job states (qgp_job_state).
+JOB_INTAKE, JOB_REMESH, JOB_GRID_UV = 0, 1, 2
+STATE_IDLE, STATE_RUNNING, STATE_DONE, STATE_FAILED, STATE_CANCELLED = 0, 1, 2, 3, 4
+
+LIBRARY_NAME = "libqgp.so"
+
+
+class QGPError(Exception):
+    """A native call failed; `code` is the qgp_status, `message` the native message."""
+
+    def __init__(self, code, message):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+
+def library_candidates():
+    """Where libqgp.so is looked for, in order."""
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the add-on folder
+    paths = []
+    if os.environ.get("QGP_LIBRARY"):
+        paths.append(os.environ["QGP_LIBRARY"])
+    paths.append(os.path.join(here, "lib", LIBRARY_NAME))  # extension zip layout
+    paths.append(os.path.join(os.path.dirname(here), "build", "lib", LIBRARY_NAME))  # source checkout
+    return paths
+
+
+_lib = None
+
+
+def load_library(path=None):
+    """Loads libqgp once and declares the C signatures. Raises QGPError if it cannot be found."""
+    global _lib
+    if _lib is not None and path is None:
+        return _lib
+    tried = []
+    for candidate in ([path] if path else library_candidates()):
+        if candidate and os.path.exists(candidate):
+            try:
+                lib = ctypes.CDLL(candidate)
+            except OSError as e:
+                tried.append(f"{candidate}: {e}")
+                continue
+            _declare(lib)
+            _lib = lib
+            return lib
+        tried.append(f"{candidate}: not found")
+    raise QGPError(ERR_INTERNAL, "cannot load the Quantized Retopo native library (" + "; ".join(tried) + ")")
+
+
+def _declare(lib):
+    c_int, c_int64, c_double, c_char_p = ctypes.c_int, ctypes.c_int64, ctypes.c_double, ctypes.c_char_p
+    p_double, p_int32, p_int64 = ctypes.POINTER(c_double), ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(c_int64)
+    p_int, vp = ctypes.POINTER(c_int), ctypes.c_void_p
+    sigs = {
+        "qgp_version": (c_char_p, []),
+        "qgp_last_error": (c_char_p, []),
+        "qgp_session_create": (c_int, [p_double, c_int64, p_int32, c_int64, ctypes.POINTER(vp)]),
+        "qgp_session_create_from_file": (c_int, [c_char_p, ctypes.POINTER(vp)]),
+        "qgp_session_free": (None, [vp]),
+        "qgp_session_error": (c_char_p, [vp]),
+        "qgp_session_set_features": (c_int, [vp, p_int32, c_int64]),
+        "qgp_session_set_option": (c_int, [vp, c_char_p, c_double]),
+        "qgp_session_set_option_string": (c_int, [vp, c_char_p, c_char_p]),
+        "qgp_job_start": (c_int, [vp, c_int]),
+        "qgp_job_poll": (c_int, [vp, p_int, p_double, ctypes.c_char_p, c_int64]),
+        "qgp_job_cancel": (c_int, [vp]),
+        "qgp_job_wait": (c_int, [vp, c_double, p_int]),
+        "qgp_report_json": (c_int, [vp, ctypes.c_char_p, c_int64, p_int64]),
+        "qgp_intake_counts": (c_int, [vp, p_int64, p_int64, p_int64]),
+        "qgp_intake_fetch": (c_int, [vp, p_double, p_int32, p_int32, p_int32]),
+    }
+    sigs.update({
+        "qgp_soup_read": (c_int, [c_char_p, ctypes.POINTER(vp)]),
+        "qgp_soup_counts": (c_int, [vp, p_int64, p_int64, p_int64]),
+        "qgp_soup_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
+        "qgp_soup_free": (None, [vp]),
+    })
+    optional = {
+        "qgp_result_quad_counts": (c_int, [vp, p_int64, p_int64]),
+        "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
+        "qgp_result_uv_counts": (c_int, [vp, p_int64]),
+        "qgp_result_uv_fetch": (c_int, [vp, p_double, p_int32]),
+    }
+    for name, (restype, argtypes) in sigs.items():
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = restype, argtypes
+    for name, (restype, argtypes) in optional.items():
+        if hasattr(lib, name):
+            fn = getattr(lib, name)
+            fn.restype, fn.argtypes = restype, argtypes
+
+
+def version():
+    return load_library().qgp_version().decode()
+
+
+def read_mesh_file(path):
+    """Reads OBJ / PLY / OFF as it is: (vertices (n,3) float64, face sizes (f,) int32, corners (c,) int32)."""
+    lib = load_library()
+    handle = ctypes.c_void_p()
+    status = lib.qgp_soup_read(os.fsencode(path), ctypes.byref(handle))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    try:
+        nv, nf, nc = ctypes.c_int64(), ctypes.c_int64(), ctypes.c_int64()
+        lib.qgp_soup_counts(handle, ctypes.byref(nv), ctypes.byref(nf), ctypes.byref(nc))
+        v = np.empty((nv.value, 3), np.float64)
+        sizes = np.empty(nf.value, np.int32)
+        corners = np.empty(nc.value, np.int32)
+        status = lib.qgp_soup_fetch(handle, _ptr(v, ctypes.c_double), _ptr(sizes, ctypes.c_int32),
+                                    _ptr(corners, ctypes.c_int32))
+        if status != OK:
+            raise QGPError(status, lib.qgp_last_error().decode())
+        return v, sizes, corners
+    finally:
+        lib.qgp_soup_free(handle)
+
+
+def _ptr(array, ctype):
+    return array.ctypes.data_as(ctypes.POINTER(ctype))
+
+
+class Session:
+    """One native session. Use as a context manager or call close()."""
+
+    def __init__(self, vertices, triangles):
+        lib = load_library()
+        self._lib = lib
+        self._handle = ctypes.c_void_p()
+        v = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+        t = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
+        status = lib.qgp_session_create(_ptr(v, ctypes.c_double), len(v), _ptr(t, ctypes.c_int32), len(t),
+                                        ctypes.byref(self._handle))
+        if status != OK:
+            raise QGPError(status, lib.qgp_last_error().decode())
+
+    @classmethod
+    def from_file(cls, path):
+        self = cls.__new__(cls)
+        self._lib = load_library()
+        self._handle = ctypes.c_void_p()
+        status = self._lib.qgp_session_create_from_file(os.fsencode(path), ctypes.byref(self._handle))
+        if status != OK:
+            raise QGPError(status, self._lib.qgp_last_error().decode())
+        return self
+
+    # -- lifetime --
+    def close(self):
+        if getattr(self, "_handle", None) is not None and self._handle.value:
+            self._lib.qgp_session_free(self._handle)
+            self._handle = ctypes.c_void_p()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def _check(self, status):
+        if status != OK:
+            raise QGPError(status, self._lib.qgp_session_error(self._handle).decode())
+
+    # -- options --
+    def set_option(self, name, value):
+        self._check(self._lib.qgp_session_set_option(self._handle, name.encode(), float(value)))
+
+    def set_option_string(self, name, value):
+        self._check(self._lib.qgp_session_set_option_string(self._handle, name.encode(), value.encode()))
+
+    def set_features(self, edges):
+        e = np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)
+        self._check(self._lib.qgp_session_set_features(self._handle, _ptr(e, ctypes.c_int32), len(e)))
+
+    # -- jobs --
+    def start(self, job):
+        self._check(self._lib.qgp_job_start(self._handle, job))
+
+    def poll(self):
+        """Returns (state, fraction of the current stage, stage name)."""
+        state, fraction = ctypes.c_int(), ctypes.c_double()
+        stage = ctypes.create_string_buffer(64)
+        self._check(self._lib.qgp_job_poll(self._handle, ctypes.byref(state), ctypes.byref(fraction), stage, 64))
+        return state.value, fraction.value, stage.value.decode()
+
+    def cancel(self):
+        self._check(self._lib.qgp_job_cancel(self._handle))
+
+    def wait(self, timeout=-1.0):
+        """Waits for the job; returns its state. Raises QGPError if the job failed or was cancelled."""
+        state = ctypes.c_int()
+        status = self._lib.qgp_job_wait(self._handle, float(timeout), ctypes.byref(state))
+        if state.value != STATE_RUNNING:
+            self._check(status)
+        return state.value
+
+    def run(self, job):
+        """Starts a job and waits for it (synchronous use)."""
+        self.start(job)
+        return self.wait()
+
+    # -- results --
+    def report(self):
+        needed = ctypes.c_int64()
+        self._check(self._lib.qgp_report_json(self._handle, None, 0, ctypes.byref(needed)))
+        buffer = ctypes.create_string_buffer(needed.value)
+        self._check(self._lib.qgp_report_json(self._handle, buffer, needed.value, ctypes.byref(needed)))
+        return json.loads(buffer.value.decode())
+
+    def intake_mesh(self):
+        """The repaired mesh: (vertices (n,3), triangles (m,3), component per triangle, input vertex per vertex)."""
+        nv, nf, nc = ctypes.c_int64(), ctypes.c_int64(), ctypes.c_int64()
+        self._check(self._lib.qgp_intake_counts(self._handle, ctypes.byref(nv), ctypes.byref(nf), ctypes.byref(nc)))
+        v = np.empty((nv.value, 3), np.float64)
+        f = np.empty((nf.value, 3), np.int32)
+        comp = np.empty(nf.value, np.int32)
+        iv = np.empty(nv.value, np.int32)
+        self._check(self._lib.qgp_intake_fetch(self._handle, _ptr(v, ctypes.c_double), _ptr(f, ctypes.c_int32),
+                                               _ptr(comp, ctypes.c_int32), _ptr(iv, ctypes.c_int32)))
+        return v, f, comp, iv
+
+    def quad_mesh(self):
+        """(vertices (n,3) float64, quads (q,4) int32 CCW, source triangle per quad (q,) int32)."""
+        if not hasattr(self._lib, "qgp_result_quad_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return quad meshes")
+        nv, nq = ctypes.c_int64(), ctypes.c_int64()
+        self._check(self._lib.qgp_result_quad_counts(self._handle, ctypes.byref(nv), ctypes.byref(nq)))
+        v = np.empty((nv.value, 3), np.float64)
+        q = np.empty((nq.value, 4), np.int32)
+        src = np.empty(nq.value, np.int32)
+        self._check(self._lib.qgp_result_quad_fetch(self._handle, _ptr(v, ctypes.c_double),
+                                                    _ptr(q, ctypes.c_int32), _ptr(src, ctypes.c_int32)))
+        return v, q, src
+
+    def grid_uv(self, num_triangles):
+        """Integer-grid map per input triangle corner, (num_triangles, 3, 2) float64 (1 unit = 1 quad;
+        NaN where intake removed the triangle), and the cut edges as input vertex pairs (k, 2) int32."""
+        if not hasattr(self._lib, "qgp_result_uv_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return grid UVs")
+        ncut = ctypes.c_int64()
+        self._check(self._lib.qgp_result_uv_counts(self._handle, ctypes.byref(ncut)))
+        uv = np.empty((num_triangles, 3, 2), np.float64)
+        cuts = np.empty((ncut.value, 2), np.int32)
+        self._check(self._lib.qgp_result_uv_fetch(self._handle, _ptr(uv, ctypes.c_double),
+                                                  _ptr(cuts, ctypes.c_int32)))
+        return uv, cuts

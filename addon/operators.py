@@ -1,0 +1,238 @@
+"""Operators: Quantized Retopo (new quad object) and Integer-Grid UVs (UV layer on the source).
+
+Both run synchronously in execute() (scripts, redo panel, blender -b) and as modal jobs from
+invoke() (progress bar, status text, Esc cancels). The source object is only ever changed by a
+successful Integer-Grid UVs run.
+"""
+import math
+import time
+
+import bpy
+
+from . import blender_mesh
+from .core import binding
+from .prefs import preferences
+
+# Native sessions per object: reused when only the density changes (re-quantization only).
+_session_cache = {}
+
+
+def _load_library(context):
+    prefs = preferences(context)
+    path = prefs.library_path if prefs and prefs.library_path else None
+    binding.load_library(bpy.path.abspath(path) if path else None)
+
+
+def _session_for(obj, source, sharp_angle, kind):
+    """A native session for this geometry and feature setup, cached per object and job kind."""
+    key = (obj.name, kind)
+    settings = (source.fingerprint(), sharp_angle)
+    cached = _session_cache.get(key)
+    if cached and cached[0] == settings:
+        return cached[1]
+    if cached:
+        cached[1].close()
+        del _session_cache[key]
+    session = binding.Session(source.vertices, source.triangles)
+    if len(source.features):
+        session.set_features(source.features)
+    session.set_option("sharp_angle", sharp_angle)
+    _session_cache[key] = (settings, session)
+    return session
+
+
+
+def _active_mesh_object(context):
+    obj = context.active_object
+    if obj is None or obj.type != "MESH":
+        return None
+    return obj
+
+
+class _JobOperator:
+    """Shared modal-job machinery: start the native job, poll it on a timer, Esc cancels."""
+
+    _timer = None
+    _session = None
+    _started = 0.0
+
+    def _start_modal(self, context, session, job):
+        session.start(job)
+        self._session = session
+        self._started = time.perf_counter()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 1000)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end_modal(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._session.cancel()
+            try:
+                self._session.wait()
+            except binding.QGPError:
+                pass
+            self._end_modal(context)
+            self.report({"WARNING"}, "Cancelled; the scene is unchanged")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        state, fraction, stage = self._session.poll()
+        if state == binding.STATE_RUNNING:
+            context.window_manager.progress_update(int(1000 * fraction))
+            context.workspace.status_text_set(
+                f"{self.bl_label}: {stage.replace('_', ' ')} {100 * fraction:.0f}%  (Esc to cancel)")
+            return {"RUNNING_MODAL"}
+        self._end_modal(context)
+        try:
+            self._session.wait()
+            return self._finish(context)
+        except binding.QGPError as e:
+            self.report({"ERROR"}, e.message)
+            return {"CANCELLED"}
+
+
+class _TargetProperties:
+    """Density and feature options shared by both operators."""
+
+    target_mode: bpy.props.EnumProperty(
+        name="Target", items=[("FACES", "Quad Count", "Aim for a number of quads"),
+                              ("EDGE", "Edge Length", "Aim for a quad edge length")], default="FACES")
+    target_faces: bpy.props.IntProperty(name="Quads", default=2000, min=10, soft_max=100000)
+    edge_length: bpy.props.FloatProperty(name="Edge Length", default=0.1, min=1e-6, subtype="DISTANCE")
+    use_marked_sharp: bpy.props.BoolProperty(name="Marked Sharp Edges", default=True,
+                                             description="Keep edges marked sharp as quad edges")
+    use_sharp_angle: bpy.props.BoolProperty(name="Sharp Angle", default=False,
+                                            description="Also keep edges sharper than the angle")
+    sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
+                                         subtype="ANGLE")
+
+    @classmethod
+    def poll(cls, context):
+        return _active_mesh_object(context) is not None and context.mode == "OBJECT"
+
+    def _prepare(self, context):
+        _load_library(context)
+        self._source_obj = _active_mesh_object(context)
+        self._source = blender_mesh.SourceMesh(context, self._source_obj, evaluated=self._use_modifiers,
+                                               use_marked_sharp=self.use_marked_sharp)
+        if len(self._source.triangles) == 0:
+            raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
+        angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
+        session = _session_for(self._source_obj, self._source, angle, self._job)
+        if self.target_mode == "FACES":
+            session.set_option("target_faces", self.target_faces)
+        else:
+            session.set_option("edge_length", self.edge_length)
+        return session
+
+    def execute(self, context):
+        try:
+            session = self._prepare(context)
+            self._started = time.perf_counter()
+            session.run(self._job)
+            self._session = session
+            return self._finish(context)
+        except binding.QGPError as e:
+            self.report({"ERROR"}, e.message)
+            return {"CANCELLED"}
+
+    def invoke(self, context, event):
+        try:
+            return self._start_modal(context, self._prepare(context), self._job)
+        except binding.QGPError as e:
+            self.report({"ERROR"}, e.message)
+            return {"CANCELLED"}
+
+    def _draw_target(self, layout):
+        layout.use_property_split = True
+        layout.prop(self, "target_mode")
+        layout.prop(self, "target_faces" if self.target_mode == "FACES" else "edge_length")
+        layout.prop(self, "use_marked_sharp")
+        row = layout.row(heading="Sharp Angle")
+        row.prop(self, "use_sharp_angle", text="")
+        sub = row.row()
+        sub.active = self.use_sharp_angle
+        sub.prop(self, "sharp_angle", text="")
+
+
+class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Operator):
+    """Remesh the active mesh into pure quads (Quantized Global Parametrization)"""
+
+    bl_idname = "object.qgp_quad_remesh"
+    bl_label = "Quantized Retopo"
+    bl_options = {"REGISTER", "UNDO"}
+    _job = binding.JOB_REMESH
+    _use_modifiers = True  # the result is a new object: remesh what the user sees
+
+    keep_source_visible: bpy.props.BoolProperty(name="Keep Source Visible", default=False)
+
+    def _finish(self, context):
+        vertices, quads, quad_triangle = self._session.quad_mesh()
+        report = self._session.report()
+        obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source)
+        if not self.keep_source_visible:
+            self._source_obj.hide_set(True)
+        seconds = report.get("timings_s", {}).get("total", time.perf_counter() - self._started)
+        self.report({"INFO"}, f"{obj.name}: {len(quads)} quads in {seconds:.1f} s")
+        return {"FINISHED"}
+
+    def draw(self, context):
+        self._draw_target(self.layout)
+        self.layout.prop(self, "keep_source_visible")
+
+
+class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator):
+    """Write seam-free integer-grid UVs (layer 'QGP Grid') on the active mesh"""
+
+    bl_idname = "object.qgp_grid_uv"
+    bl_label = "Integer-Grid UVs"
+    bl_options = {"REGISTER", "UNDO"}
+    _job = binding.JOB_GRID_UV
+    _use_modifiers = False  # UVs belong to the mesh data's own loops
+
+    quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
+                                            description="Grid cells per UV unit: a texture of this period "
+                                                        "tiles without visible seams")
+    mark_seams: bpy.props.BoolProperty(name="Mark Seams", default=False, description="Mark the cuts as seams")
+
+    def _finish(self, context):
+        corner_uv, cuts = self._session.grid_uv(len(self._source.triangles))
+        mesh = self._source_obj.data
+        blender_mesh.write_grid_uvs(mesh, self._source, corner_uv, self.quads_per_unit)
+        message = "UV layer 'QGP Grid' written"
+        if self.mark_seams:
+            message += f", {blender_mesh.mark_seams(mesh, self._source, cuts)} seam edges marked"
+        mesh.update()
+        self.report({"INFO"}, message)
+        return {"FINISHED"}
+
+    def draw(self, context):
+        self._draw_target(self.layout)
+        self.layout.prop(self, "quads_per_unit")
+        self.layout.prop(self, "mark_seams")
+
+
+classes = (OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_grid_uv)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
+    for _, session in _session_cache.values():
+        session.close()
+    _session_cache.clear()

@@ -1,0 +1,513 @@
+#include "cross_field/cross_field.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+#include <cmath>
+#include <complex>
+#include <random>
+#include <string>
+
+#include "core/error.h"
+
+namespace qgp {
+namespace {
+
+using Complex = std::complex<double>;
+using ComplexSparse = Eigen::SparseMatrix<Complex>;
+using ComplexVector = Eigen::VectorXcd;
+
+constexpr double kQuarter = M_PI / 2;
+
+// Angle reduced to (-pi, pi].
+double wrap_angle(double a) {
+  a = std::remainder(a, 2 * M_PI);
+  return a <= -M_PI ? a + 2 * M_PI : a;
+}
+
+// Nearest multiple q of 90deg to angle a (ties round up); *residual = a - q * 90deg.
+int nearest_quarter(double a, double* residual) {
+  const double q = std::floor(a / kQuarter + 0.5);
+  *residual = a - q * kQuarter;
+  return static_cast<int>(q);
+}
+
+int mod4(int x) { return ((x % 4) + 4) % 4; }
+
+// Per-face orthonormal frames and the angles of the halfedges in them.
+struct FaceFrames {
+  std::vector<Vec3> normal, e1, e2;  // #F unit vectors; e1 along halfedge 3f, e2 = normal x e1
+  std::vector<double> area;          // #F
+  std::vector<double> angle;         // 3#F: angle of halfedge h's vector in face(h)'s frame
+};
+
+FaceFrames compute_frames(const TriMesh& mesh) {
+  const int nf = mesh.num_faces();
+  FaceFrames fr;
+  fr.normal.resize(nf), fr.e1.resize(nf), fr.e2.resize(nf), fr.area.resize(nf);
+  fr.angle.resize(3 * nf);
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 n = mesh.face_normal_unnormalized(f);
+    const double len = n.norm(), e_len = mesh.edge_vector(3 * f).norm();
+    if (!(len > 0) || !std::isfinite(len) || !(e_len > 0))
+      throw Error(ErrorCode::InvalidMesh, "face " + std::to_string(f) + " has no normal (degenerate triangle)");
+    fr.normal[f] = n / len;
+    fr.area[f] = 0.5 * len;
+    fr.e1[f] = mesh.edge_vector(3 * f) / e_len;
+    fr.e2[f] = fr.normal[f].cross(fr.e1[f]);
+    fr.angle[3 * f] = 0;
+    for (int k = 1; k < 3; ++k) {
+      const Vec3 v = mesh.edge_vector(3 * f + k);
+      fr.angle[3 * f + k] = std::atan2(v.dot(fr.e2[f]), v.dot(fr.e1[f]));
+    }
+  }
+  return fr;
+}
+
+// Interior angle of face(h) at from(h).
+double corner_angle(const TriMesh& mesh, int h) {
+  const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+bool is_feature_halfedge(const TriMesh& mesh, const std::vector<char>& feature_edge, int h) {
+  return mesh.opposite[h] < 0 || feature_edge[mesh.edge_of[h]];
+}
+
+// Constraint of a face next to features (angle in its own frame), see the header:
+// kAligned (one feature edge), kCornerCompromise (two or three feature edges), or free.
+enum ConstraintKind : char { kFree = 0, kAligned = 1, kCornerCompromise = 2, kSectorCompromise = 3 };
+
+ConstraintKind face_constraint(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
+                               int f, double* theta) {
+  bool is_feature[3];
+  int count = 0;
+  for (int k = 0; k < 3; ++k) count += is_feature[k] = is_feature_halfedge(mesh, feature_edge, 3 * f + k);
+  if (count == 0) return kFree;
+  if (count == 1) {
+    for (int k = 0; k < 3; ++k)
+      if (is_feature[k]) *theta = fr.angle[3 * f + k];
+    return kAligned;
+  }
+  // Corner k lies between halfedge 3f+k (outgoing) and halfedge 3f+(k+2)%3 (incoming); both are
+  // features there. With three features, take the corner closest to 90 degrees.
+  int best = -1;
+  double best_angle = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!is_feature[k] || !is_feature[(k + 2) % 3]) continue;
+    const double beta = corner_angle(mesh, 3 * f + k);
+    if (best < 0 || std::abs(beta - kQuarter) < std::abs(best_angle - kQuarter)) best = k, best_angle = beta;
+  }
+  // Outgoing edge at chart angle 45deg - beta/2, the other one at 45deg + beta/2.
+  *theta = fr.angle[3 * f + best] + 0.5 * (best_angle - kQuarter);
+  return kCornerCompromise;
+}
+
+// Acute sectors: around a vertex, the faces between two consecutive feature/boundary edges whose
+// angles sum to beta < 45deg (over two faces or more) would otherwise map to zero quarter turns,
+// i.e. collapse. All their faces get the compromise of a two-feature face: the first edge of the
+// sector (counter-clockwise) at 45deg - beta/2 off its axis, the last at 45deg + beta/2, so the
+// sector maps to exactly one quarter turn. A face in several acute sectors takes the sharpest;
+// faces with two or three feature edges keep their own corner compromise.
+void constrain_acute_sectors(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
+                             std::vector<char>& kind, std::vector<double>& theta) {
+  std::vector<double> sharpest(mesh.num_faces(), kQuarter / 2);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const int k = static_cast<int>(fan.size());
+    int start = -1, edges = 0;
+    for (int j = 0; j < k; ++j)
+      if (is_feature_halfedge(mesh, feature_edge, fan[j])) start = start < 0 ? j : start, ++edges;
+    const bool boundary = is_boundary_vertex(mesh, v);
+    if (start < 0 || (!boundary && edges < 2)) continue;  // a sector needs two distinct edges
+    const int end = boundary ? k : start + k;
+    for (int j0 = start; j0 < end;) {
+      // Sector: faces fan[j0..j1] (cyclic), closed by the feature halfedge prev(fan[j1]).
+      int j1 = j0;
+      double beta = corner_angle(mesh, fan[j0 % k]);
+      while (!is_feature_halfedge(mesh, feature_edge, TriMesh::prev(fan[j1 % k])))
+        beta += corner_angle(mesh, fan[++j1 % k]);
+      if (j1 > j0 && beta < kQuarter / 2) {
+        double swept = 0;  // angle from the sector's first edge to fan[j]'s edge
+        for (int j = j0; j <= j1; ++j) {
+          const int h = fan[j % k], f = h / 3;
+          if (kind[f] != kCornerCompromise && beta < sharpest[f]) {
+            sharpest[f] = beta;
+            kind[f] = kSectorCompromise;
+            theta[f] = fr.angle[h] - swept + 0.5 * (beta - kQuarter);
+          }
+          swept += corner_angle(mesh, h);
+        }
+      }
+      j0 = j1 + 1;
+    }
+  }
+}
+
+// Rotates v by the minimal rotation that takes unit vector a to unit vector b. For opposite
+// vectors (a fold of 180 degrees) it turns by 180 degrees about `axis` (a unit vector orthogonal
+// to both, e.g. the shared edge).
+Vec3 rotate_between(const Vec3& a, const Vec3& b, const Vec3& v, const Vec3& axis = Vec3::Zero()) {
+  const Vec3 k = a.cross(b);
+  const double c = a.dot(b);
+  if (1 + c > 1e-12) return v * c + k.cross(v) + k * (k.dot(v) / (1 + c));
+  return 2 * axis.dot(v) * axis - v;
+}
+
+// Frames of the proxy surface that defines the connection: the true face normals diffused by one
+// implicit heat step (M + t L) n = M n0 with t = r^2 / 2, r = kSmoothingRadius * bounding-box
+// diagonal (L: face-adjacency Laplacian with the field's edge weights, cut at feature and
+// boundary edges). Detail below ~1% of the model size (scan noise) then does not spawn
+// singularity pairs, while coarse meshes (edges longer than r) are hardly changed. The field is
+// solved in these frames and turned back onto the true faces by the minimal rotation between
+// the normals.
+constexpr double kSmoothingRadius = 0.01;
+
+struct ProxyFrames {
+  std::vector<Vec3> normal, e1, e2;  // #F unit vectors; e1 = halfedge 3f projected, e2 = normal x e1
+};
+
+ProxyFrames proxy_frames(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge) {
+  const int nf = mesh.num_faces();
+  const double r = kSmoothingRadius * mesh.bounding_box_diagonal();
+  const double t = 0.5 * r * r;
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (int f = 0; f < nf; ++f) triplets.emplace_back(f, f, fr.area[f]);
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0 || feature_edge[e]) continue;
+    const int f = h / 3, g = o / 3;
+    const double w = t * 1.5 * mesh.edge_vector(h).squaredNorm() / (fr.area[f] + fr.area[g]);
+    triplets.emplace_back(f, f, w);
+    triplets.emplace_back(g, g, w);
+    triplets.emplace_back(f, g, -w);
+    triplets.emplace_back(g, f, -w);
+  }
+  Eigen::SparseMatrix<double> heat(nf, nf);
+  heat.setFromTriplets(triplets.begin(), triplets.end());
+  // Well conditioned (about 1 + 12 t / h^2 for edge length h): Jacobi-preconditioned CG.
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-5);  // relative residual; the normals only steer the connection
+  cg.setMaxIterations(1000);
+  cg.compute(heat);
+  Eigen::MatrixXd rhs(nf, 3);
+  for (int f = 0; f < nf; ++f) rhs.row(f) = fr.area[f] * fr.normal[f].transpose();
+  const Eigen::MatrixXd diffused = cg.solve(rhs);
+  std::vector<Vec3> n(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 d = diffused.row(f).transpose();
+    n[f] = d.allFinite() && d.norm() > 0 ? Vec3(d.normalized()) : fr.normal[f];
+  }
+  ProxyFrames p;
+  p.normal = std::move(n);
+  p.e1.resize(nf), p.e2.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    // Where diffusion tilted a normal by 90 degrees or more (thin folds) keep the true one.
+    if (!(p.normal[f].dot(fr.normal[f]) > 0)) p.normal[f] = fr.normal[f];
+    p.e1[f] = rotate_between(fr.normal[f], p.normal[f], fr.e1[f]);
+    p.e2[f] = p.normal[f].cross(p.e1[f]);
+  }
+  return p;
+}
+
+// Angle in frame (e1, e2) of the unit tangent obtained by turning angle t of frame (from_e1,
+// from_e2, from_n) onto the plane with normal to_n.
+double transfer_angle(double t, const Vec3& from_e1, const Vec3& from_e2, const Vec3& from_n, const Vec3& to_n,
+                      const Vec3& e1, const Vec3& e2, const Vec3& fold_axis = Vec3::Zero()) {
+  const Vec3 d = rotate_between(from_n, to_n, std::cos(t) * from_e1 + std::sin(t) * from_e2, fold_axis);
+  return std::atan2(d.dot(e2), d.dot(e1));
+}
+
+// Dirichlet energy of the power field, sum over interior edges of w |z_g - rho z_f|^2, as a
+// Hermitian matrix (full storage). rho: transport of the proxy frames across the edge (minimal
+// rotation between the two proxy normals; on the true surface this is the rotation about the
+// shared edge, i.e. unfolding).
+ComplexSparse smoothness_matrix(const TriMesh& mesh, const FaceFrames& fr, const ProxyFrames& proxy) {
+  std::vector<Eigen::Triplet<Complex>> triplets;
+  triplets.reserve(4 * mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    const int f = h / 3, g = o / 3;
+    const double transport = transfer_angle(0, proxy.e1[f], proxy.e2[f], proxy.normal[f], proxy.normal[g],
+                                            proxy.e1[g], proxy.e2[g], mesh.edge_vector(h).normalized());
+    const Complex rho = std::polar(1.0, 4 * transport);
+    const double w = 1.5 * mesh.edge_vector(h).squaredNorm() / (fr.area[f] + fr.area[g]);
+    triplets.emplace_back(f, f, w);
+    triplets.emplace_back(g, g, w);
+    triplets.emplace_back(g, f, -w * rho);
+    triplets.emplace_back(f, g, -w * std::conj(rho));
+  }
+  ComplexSparse A(mesh.num_faces(), mesh.num_faces());
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  return A;
+}
+
+using Solver = Eigen::CholmodDecomposition<ComplexSparse, Eigen::Lower>;
+
+// Ordering + symbolic analysis, then the numeric factorization, with a cancel check between.
+// CHOLMOD cannot be interrupted inside either step; METIS nested dissection balances them (igea,
+// 268k faces, Debian's reference BLAS: 1.0 s + 0.9 s CPU, against 0.2 s + 1.8 s with AMD) and
+// halves the fill. AMD is the fallback if METIS is unavailable. CHOLMOD prints nothing.
+void factorize(Solver& solver, const ComplexSparse& A, const Progress& progress) {
+  solver.cholmod().print = 0;
+  solver.cholmod().nmethods = 1;
+  solver.cholmod().method[0].ordering = CHOLMOD_METIS;
+  solver.analyzePattern(A);
+  if (solver.info() != Eigen::Success) {
+    solver.cholmod().method[0].ordering = CHOLMOD_AMD;
+    solver.analyzePattern(A);
+  }
+  progress.check_cancel();
+  solver.factorize(A);
+  if (solver.info() != Eigen::Success)
+    throw Error(ErrorCode::StageFailed, "cross field: sparse factorization failed (" +
+                                            std::to_string(A.rows()) + " unknowns)");
+}
+
+// Power field with the constrained faces fixed: minimizes the energy over the free faces.
+ComplexVector solve_constrained(const ComplexSparse& A, const std::vector<char>& fixed,
+                                const ComplexVector& z_fixed, Progress& progress) {
+  const int n = static_cast<int>(A.rows());
+  std::vector<int> free_index(n, -1);
+  int num_free = 0;
+  for (int f = 0; f < n; ++f)
+    if (!fixed[f]) free_index[f] = num_free++;
+  ComplexVector z = z_fixed;
+  if (num_free == 0) return z;
+  std::vector<Eigen::Triplet<Complex>> triplets;
+  ComplexVector rhs = ComplexVector::Zero(num_free);
+  for (int col = 0; col < n; ++col)
+    for (ComplexSparse::InnerIterator it(A, col); it; ++it) {
+      const int row = static_cast<int>(it.row());
+      if (fixed[row]) continue;
+      if (fixed[col]) rhs[free_index[row]] -= it.value() * z_fixed[col];
+      else triplets.emplace_back(free_index[row], free_index[col], it.value());
+    }
+  ComplexSparse A_free(num_free, num_free);
+  A_free.setFromTriplets(triplets.begin(), triplets.end());
+  progress.update(0.3);
+  Solver solver;
+  factorize(solver, A_free, progress);
+  progress.update(0.6);
+  const ComplexVector z_free = solver.solve(rhs);
+  for (int f = 0; f < n; ++f)
+    if (!fixed[f]) z[f] = z_free[free_index[f]];
+  return z;
+}
+
+// Smallest generalized eigenvector of A z = lambda M z (M = diag(area)) by inverse iteration.
+ComplexVector smallest_eigenvector(const ComplexSparse& A, const std::vector<double>& area, Progress& progress) {
+  const int n = static_cast<int>(A.rows());
+  const Eigen::VectorXd mass = Eigen::Map<const Eigen::VectorXd>(area.data(), n);
+  // A tiny shift keeps the factorization definite when a parallel field exists (lambda = 0).
+  double trace_A = 0;
+  for (int f = 0; f < n; ++f) trace_A += A.coeff(f, f).real();
+  const double shift = 1e-8 * trace_A / mass.sum();
+  ComplexSparse shifted = A;
+  for (int f = 0; f < n; ++f) shifted.coeffRef(f, f) += shift * mass[f];
+  progress.update(0.2);
+  Solver solver;
+  factorize(solver, shifted, progress);
+  progress.update(0.4);
+
+  std::mt19937 random(12345);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  ComplexVector x(n);
+  for (int f = 0; f < n; ++f) x[f] = Complex(uniform(random), uniform(random));
+  auto m_norm = [&](const ComplexVector& v) { return std::sqrt((v.cwiseAbs2().array() * mass.array()).sum()); };
+  x /= m_norm(x);
+  // Stop when successive iterates agree to ~0.01 rad (1 - |<y, x>_M| < 1e-4): the singularities
+  // are settled by then (measured on the shared meshes; igea needs 17 iterations).
+  constexpr int kMaxIterations = 60;
+  constexpr double kEigenTolerance = 1e-4;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    const ComplexVector mx = (x.array() * mass.array().cast<Complex>()).matrix();
+    ComplexVector y = solver.solve(mx);
+    y /= m_norm(y);
+    // |<y, x>_M| -> 1 as the iterates align (up to a phase).
+    const double overlap = std::abs((y.conjugate().array() * mass.array().cast<Complex>() * x.array()).sum());
+    x = std::move(y);
+    progress.update(0.4 + 0.5 * (it + 1) / kMaxIterations);
+    if (1 - overlap < kEigenTolerance) break;
+  }
+  return x;
+}
+
+// Sectors around a vertex (fan: its outgoing halfedges, counter-clockwise) between consecutive
+// feature/boundary edges a (outgoing, first) and b (incoming, last) map to
+// n = (rho(a) + angles + residual rotations inside - rho(b)) / 90deg quarter turns, an exact
+// integer. Counts those with n < 1 and one-face sectors with n != 1 (a triangle corner between
+// two isolines must be 90deg): the parametrization has to collapse there.
+int count_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge, const std::vector<int>& fan,
+                            bool boundary, const std::vector<double>& eps, const std::vector<double>& rho) {
+  const int k = static_cast<int>(fan.size());
+  int start = -1;
+  for (int j = 0; j < k && start < 0; ++j)
+    if (is_feature_halfedge(mesh, feature_edge, fan[j])) start = j;
+  if (start < 0) return 0;
+  int collapsed = 0;
+  const int end = boundary ? k : start + k;
+  for (int j0 = start; j0 < end;) {
+    int j1 = j0;
+    double swept = rho[fan[j0 % k]] + corner_angle(mesh, fan[j0 % k]);
+    while (!is_feature_halfedge(mesh, feature_edge, TriMesh::prev(fan[j1 % k]))) {
+      swept += eps[TriMesh::prev(fan[j1 % k])];
+      swept += corner_angle(mesh, fan[++j1 % k]);
+    }
+    swept -= rho[TriMesh::prev(fan[j1 % k])];
+    const long n = std::lround(swept / kQuarter);
+    if (n < 1 || (j1 == j0 && n != 1)) ++collapsed;
+    j0 = j1 + 1;
+  }
+  return collapsed;
+}
+
+}  // namespace
+
+Vec3 rotate_in_face(const TriMesh& mesh, int f, const Vec3& d, int k) {
+  const Vec3 n = mesh.face_normal_unnormalized(f).normalized();
+  const Vec3 d90 = n.cross(d);
+  switch (mod4(k)) {
+    case 0: return d;
+    case 1: return d90;
+    case 2: return -d;
+    default: return -d90;
+  }
+}
+
+double chart_angle(const TriMesh& mesh, int h, const Vec3& u_axis) {
+  const Vec3 n = mesh.face_normal_unnormalized(h / 3).normalized();
+  const Vec3 v = mesh.edge_vector(h);
+  return std::atan2(v.dot(n.cross(u_axis)), v.dot(u_axis));
+}
+
+std::vector<char> detect_feature_edges(const TriMesh& mesh, const std::vector<char>& caller_features,
+                                       double sharp_angle_deg) {
+  const int ne = mesh.num_edges();
+  std::vector<char> feature(ne, 0);
+  const double sharp = sharp_angle_deg * M_PI / 180;
+  for (int e = 0; e < ne; ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    if (!caller_features.empty() && caller_features[e]) feature[e] = 1;
+    if (sharp_angle_deg >= 0) {
+      const Vec3 a = mesh.face_normal_unnormalized(h / 3).normalized();
+      const Vec3 b = mesh.face_normal_unnormalized(o / 3).normalized();
+      if (std::atan2(a.cross(b).norm(), a.dot(b)) > sharp) feature[e] = 1;
+    }
+  }
+  return feature;
+}
+
+CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& options, Progress& progress) {
+  const int nf = mesh.num_faces(), ne = mesh.num_edges(), nh = mesh.num_halfedges(), nv = mesh.num_vertices();
+  if (nf == 0) throw Error(ErrorCode::InvalidMesh, "cross field: the mesh has no faces");
+  if (!options.feature_edges.empty() && static_cast<int>(options.feature_edges.size()) != ne)
+    throw Error(ErrorCode::InvalidArgument, "cross field: feature_edges has " +
+                                                std::to_string(options.feature_edges.size()) +
+                                                " entries, the mesh has " + std::to_string(ne) + " edges");
+  CrossField field;
+  const FaceFrames fr = compute_frames(mesh);
+
+  field.feature_edge = detect_feature_edges(mesh, options.feature_edges, options.sharp_angle_deg);
+
+  // Constrained faces and the power field.
+  std::vector<double> theta(nf, 0.0);
+  field.constrained_face.assign(nf, 0);
+  ComplexVector z_fixed = ComplexVector::Zero(nf);
+  int num_constrained = 0;
+  for (int f = 0; f < nf; ++f) {
+    int count = 0;
+    for (int k = 0; k < 3; ++k) count += is_feature_halfedge(mesh, field.feature_edge, 3 * f + k);
+    field.num_overconstrained_faces += count == 3;
+  }
+  for (int f = 0; f < nf; ++f) field.constrained_face[f] = face_constraint(mesh, fr, field.feature_edge, f, &theta[f]);
+  constrain_acute_sectors(mesh, fr, field.feature_edge, field.constrained_face, theta);
+  for (int f = 0; f < nf; ++f)
+    if (field.constrained_face[f] != kFree) {
+      z_fixed[f] = std::polar(1.0, 4 * theta[f]);
+      ++num_constrained;
+    }
+  progress.update(0.05);
+  progress.check_cancel();
+  if (num_constrained < nf) {
+    const ProxyFrames proxy = proxy_frames(mesh, fr, field.feature_edge);
+    for (int f = 0; f < nf; ++f)
+      if (field.constrained_face[f])
+        z_fixed[f] = std::polar(1.0, 4 * transfer_angle(theta[f], fr.e1[f], fr.e2[f], fr.normal[f], proxy.normal[f],
+                                                        proxy.e1[f], proxy.e2[f]));
+    progress.check_cancel();
+    const ComplexSparse A = smoothness_matrix(mesh, fr, proxy);
+    const ComplexVector z = num_constrained > 0 ? solve_constrained(A, field.constrained_face, z_fixed, progress)
+                                                : smallest_eigenvector(A, fr.area, progress);
+    for (int f = 0; f < nf; ++f)
+      if (!field.constrained_face[f])
+        theta[f] = transfer_angle(std::arg(z[f]) / 4, proxy.e1[f], proxy.e2[f], proxy.normal[f], fr.normal[f],
+                                  fr.e1[f], fr.e2[f]);
+  }
+  progress.update(0.9);
+  field.direction.resize(nf);
+  for (int f = 0; f < nf; ++f) field.direction[f] = std::cos(theta[f]) * fr.e1[f] + std::sin(theta[f]) * fr.e2[f];
+
+  // Isoline sectors of feature/boundary halfedges, each from its own face (nearest axis);
+  // rho = chart angle - sector * 90deg, in [-45deg, 45deg].
+  field.edge_sector.assign(nh, -1);
+  std::vector<double> rho(nh, 0.0);
+  for (int h = 0; h < nh; ++h)
+    if (is_feature_halfedge(mesh, field.feature_edge, h))
+      field.edge_sector[h] =
+          static_cast<int8_t>(mod4(nearest_quarter(wrap_angle(fr.angle[h] - theta[h / 3]), &rho[h])));
+
+  // Matchings and the residual rotation eps[h] left after the quarter turns (the edge's chart
+  // angle on the far side minus its chart angle here minus matching * 90deg). Ordinary edges:
+  // nearest quarter turn, |eps| <= 45deg. Feature edges: the quarter turn that keeps both sides'
+  // own sectors, q(o) = q(h) + r + 2, so |eps| = |rho(o) - rho(h)| <= 90deg.
+  field.matching.assign(nh, 0);
+  std::vector<double> eps(nh, 0.0);
+  for (int e = 0; e < ne; ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    const double mismatch = wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]);
+    int q;
+    if (field.feature_edge[e]) {
+      q = field.edge_sector[o] - field.edge_sector[h] - 2;
+      eps[h] = wrap_angle(mismatch - q * kQuarter);
+    } else {
+      q = nearest_quarter(mismatch, &eps[h]);
+    }
+    eps[o] = -eps[h];
+    field.matching[h] = static_cast<int8_t>(mod4(q));
+    field.matching[o] = static_cast<int8_t>(mod4(-q));
+  }
+
+  // Index = (angle defect - field rotation relative to parallel transport) / 90deg; on the
+  // boundary the defect is the turning pi - sum(angles), corrected by how far the two boundary
+  // edges are off their isolines. Every value is an integer up to rounding and they sum to 4 chi.
+  field.vertex_index.assign(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const bool boundary = is_boundary_vertex(mesh, v);
+    double turning = boundary ? M_PI : 2 * M_PI;
+    for (size_t i = 0; i < fan.size(); ++i) {
+      turning -= corner_angle(mesh, fan[i]);
+      if (mesh.opposite[TriMesh::prev(fan[i])] >= 0) turning -= eps[TriMesh::prev(fan[i])];
+    }
+    if (boundary) turning += rho[TriMesh::prev(fan.back())] - rho[fan.front()];
+    field.vertex_index[v] = static_cast<int>(std::lround(turning / kQuarter));
+    field.num_collapsed_sectors += count_collapsed_sectors(mesh, field.feature_edge, fan, boundary, eps, rho);
+  }
+  for (int v = 0; v < nv; ++v) {
+    field.index_sum += field.vertex_index[v];
+    field.num_singularities += field.vertex_index[v] != 0;
+  }
+  field.euler_characteristic = nv - ne + nf;
+  if (field.index_sum != 4 * field.euler_characteristic)
+    throw Error(ErrorCode::StageFailed, "cross field: singularity indices sum to " + std::to_string(field.index_sum) +
+                                            " quarter turns instead of 4 * " +
+                                            std::to_string(field.euler_characteristic) + " (internal error)");
+  progress.update(1.0);
+  return field;
+}
+
+}  // namespace qgp

@@ -1,0 +1,186 @@
+#include "quad_extraction/quad_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <unordered_map>
+
+#include "quad_extraction/surface_projection.h"
+
+namespace qgp {
+
+QuadTopology quad_topology(const QuadMesh& quads) {
+  QuadTopology t;
+  const int nv = quads.num_vertices(), nq = quads.num_quads();
+  t.vertices = nv;
+  t.faces = nq;
+  // Undirected edge -> uses in each direction (forward = from the lower to the higher index).
+  struct Uses { int forward = 0, backward = 0; };
+  std::unordered_map<uint64_t, Uses> edges;
+  edges.reserve(4 * static_cast<size_t>(nq));
+  std::vector<char> used(nv, 0);
+  for (int q = 0; q < nq; ++q) {
+    bool degenerate = false;
+    for (int k = 0; k < 4; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      used[a] = 1;
+      for (int j = k + 1; j < 4; ++j) degenerate |= a == quads.Q(q, j);
+      const uint64_t key = (uint64_t(std::min(a, b)) << 32) | uint32_t(std::max(a, b));
+      Uses& u = edges[key];
+      (a < b ? u.forward : u.backward)++;
+    }
+    t.degenerate_quads += degenerate;
+  }
+  t.edges = static_cast<int>(edges.size());
+  t.valence.assign(nv, 0);
+  t.on_boundary.assign(nv, 0);
+  for (const auto& [key, u] : edges) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    ++t.valence[a], ++t.valence[b];
+    const int n = u.forward + u.backward;
+    if (n == 1) ++t.boundary_edges, t.on_boundary[a] = t.on_boundary[b] = 1;
+    if (n > 2) ++t.non_manifold_edges;
+    if (u.forward > 1 || u.backward > 1) ++t.inconsistent_edges;
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (!used[v]) {
+      ++t.unreferenced_vertices;
+      continue;
+    }
+    if (t.on_boundary[v]) t.irregular_boundary += t.valence[v] != 3;
+    else t.irregular_interior += t.valence[v] != 4;
+  }
+  t.euler_characteristic = t.vertices - t.edges + t.faces;
+  return t;
+}
+
+namespace {
+
+// Area-weighted random points on a triangle soup, plus every vertex.
+std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T, int count,
+                                 std::mt19937& rng) {
+  std::vector<Vec3> samples(V.begin(), V.end());
+  std::vector<double> cdf(T.size());
+  double total = 0;
+  for (size_t t = 0; t < T.size(); ++t) {
+    total += 0.5 * (V[T[t][1]] - V[T[t][0]]).cross(V[T[t][2]] - V[T[t][0]]).norm();
+    cdf[t] = total;
+  }
+  if (T.empty() || !(total > 0)) return samples;
+  std::uniform_real_distribution<double> uniform(0, 1);
+  for (int i = 0; i < count; ++i) {
+    const size_t t = std::min(T.size() - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform(rng) * total) -
+                                                   cdf.begin()));
+    double r1 = uniform(rng), r2 = uniform(rng);
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    samples.push_back(V[T[t][0]] + r1 * (V[T[t][1]] - V[T[t][0]]) + r2 * (V[T[t][2]] - V[T[t][0]]));
+  }
+  return samples;
+}
+
+double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target, Progress& progress) {
+  double worst = 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    if ((i & 1023) == 0) progress.check_cancel();
+    worst = std::max(worst, target.closest_point(samples[i]).squared_distance);
+  }
+  return std::sqrt(worst);
+}
+
+}  // namespace
+
+QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
+                                 Progress& progress) {
+  QuadMetrics m;
+  m.topology = quad_topology(quads);
+  m.irregular_vertices = m.topology.irregular_interior + m.topology.irregular_boundary;
+  const int nq = quads.num_quads();
+  const TriangleBvh reference_bvh(reference);
+
+  std::vector<double> deviations;
+  deviations.reserve(4 * static_cast<size_t>(nq));
+  for (int q = 0; q < nq; ++q) {
+    if ((q & 1023) == 0) progress.check_cancel();
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
+    const Vec3 normal = (p[2] - p[0]).cross(p[3] - p[1]);
+    const double normal_length = normal.norm();
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 e1 = p[(k + 1) % 4] - p[k], e2 = p[(k + 3) % 4] - p[k];
+      const double l = e1.norm() * e2.norm();
+      const double sj = l > 0 && normal_length > 0 ? e1.cross(e2).dot(normal) / (l * normal_length) : -1;
+      m.min_scaled_jacobian = std::min(m.min_scaled_jacobian, sj);
+      const double angle = l > 0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) * 180 / M_PI : 0;
+      deviations.push_back(std::abs(angle - 90));
+    }
+    // Reference normal: sum of the surface normals at the closest points of five interior points
+    // of the bilinear quad (interior points, unlike corners on a sharp edge, have an unambiguous
+    // closest triangle when the quad lies on the surface).
+    Vec3 reference_normal = Vec3::Zero();
+    const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}};
+    for (const auto& st : at) {
+      const Vec3 x = (1 - st[0]) * (1 - st[1]) * p[0] + st[0] * (1 - st[1]) * p[1] + st[0] * st[1] * p[2] +
+                     (1 - st[0]) * st[1] * p[3];
+      const TriangleBvh::Hit hit = reference_bvh.closest_point(x);
+      if (hit.triangle >= 0) reference_normal += reference.face_normal_unnormalized(hit.triangle).normalized();
+    }
+    if (!(normal.dot(reference_normal) > 0)) ++m.flipped_quads;
+  }
+  if (!deviations.empty()) {
+    double sum = 0;
+    for (double d : deviations) sum += d;
+    m.mean_angle_deviation = sum / deviations.size();
+    const size_t k = std::min(deviations.size() - 1, static_cast<size_t>(0.95 * deviations.size()));
+    std::nth_element(deviations.begin(), deviations.begin() + k, deviations.end());
+    m.p95_angle_deviation = deviations[k];
+  }
+  if (nq == 0) m.min_scaled_jacobian = 0;
+
+  if (options.hausdorff && nq > 0 && reference.num_faces() > 0) {
+    std::mt19937 rng(options.seed);
+    std::vector<Vec3> qv(quads.V.rows());
+    for (int v = 0; v < quads.V.rows(); ++v) qv[v] = quads.V.row(v).transpose();
+    std::vector<std::array<int, 3>> qt;
+    qt.reserve(2 * static_cast<size_t>(nq));
+    for (int q = 0; q < nq; ++q) {
+      qt.push_back({quads.Q(q, 0), quads.Q(q, 1), quads.Q(q, 2)});
+      qt.push_back({quads.Q(q, 0), quads.Q(q, 2), quads.Q(q, 3)});
+    }
+    std::vector<Vec3> rv(reference.num_vertices());
+    for (int v = 0; v < reference.num_vertices(); ++v) rv[v] = reference.position(v);
+    std::vector<std::array<int, 3>> rt(reference.num_faces());
+    for (int f = 0; f < reference.num_faces(); ++f) rt[f] = {reference.F(f, 0), reference.F(f, 1), reference.F(f, 2)};
+    const TriangleBvh quad_bvh(quads.V, qt);
+    const double diagonal = reference.bounding_box_diagonal();
+    const double scale = diagonal > 0 ? 1 / diagonal : 1;
+    m.hausdorff_quads_to_mesh = scale * max_distance(sample_surface(qv, qt, options.hausdorff_samples, rng),
+                                                     reference_bvh, progress);
+    m.hausdorff_mesh_to_quads = scale * max_distance(sample_surface(rv, rt, options.hausdorff_samples, rng),
+                                                     quad_bvh, progress);
+    m.hausdorff = std::max(m.hausdorff_quads_to_mesh, m.hausdorff_mesh_to_quads);
+  }
+  return m;
+}
+
+Json quad_report_json(const QuadMetrics& m) {
+  Json j;
+  j["faces"] = m.topology.faces;
+  j["vertices"] = m.topology.vertices;
+  j["irregular_vertices"] = m.irregular_vertices;
+  j["irregular_interior"] = m.topology.irregular_interior;
+  j["irregular_boundary"] = m.topology.irregular_boundary;
+  j["euler_characteristic"] = m.topology.euler_characteristic;
+  j["boundary_edges"] = m.topology.boundary_edges;
+  j["non_manifold_edges"] = m.topology.non_manifold_edges;
+  j["inconsistent_edges"] = m.topology.inconsistent_edges;
+  j["min_scaled_jacobian"] = m.min_scaled_jacobian;
+  j["mean_angle_deviation_deg"] = m.mean_angle_deviation;
+  j["p95_angle_deviation_deg"] = m.p95_angle_deviation;
+  j["flipped_quads"] = m.flipped_quads;
+  j["hausdorff"] = m.hausdorff;
+  j["hausdorff_quads_to_mesh"] = m.hausdorff_quads_to_mesh;
+  j["hausdorff_mesh_to_quads"] = m.hausdorff_mesh_to_quads;
+  return j;
+}
+
+}  // namespace qgp

@@ -1,0 +1,58 @@
+// Validity and quality figures of a quad mesh, measured against the triangle surface it
+// approximates: topology (manifoldness, orientation, Euler characteristic, valences), element
+// quality (scaled Jacobian, angle deviation), flips against the surface normals, and the two-sided
+// Hausdorff distance.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/json.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/quad_mesh.h"
+
+namespace qgp {
+
+struct QuadTopology {
+  int vertices = 0, edges = 0, faces = 0;
+  int boundary_edges = 0;        // edges with one quad
+  int non_manifold_edges = 0;    // edges with more than two quads
+  int inconsistent_edges = 0;    // edges two quads traverse in the same direction
+  int degenerate_quads = 0;      // quads repeating a vertex
+  int unreferenced_vertices = 0;
+  int euler_characteristic = 0;  // V - E + F
+  std::vector<int> valence;      // #V: number of edges at each vertex
+  std::vector<char> on_boundary; // #V: touches a boundary edge
+  int irregular_interior = 0;    // interior vertices of valence != 4
+  int irregular_boundary = 0;    // boundary vertices of valence != 3
+};
+
+QuadTopology quad_topology(const QuadMesh& quads);
+
+struct QuadMetricsOptions {
+  bool hausdorff = true;          // sample the two-sided Hausdorff distance
+  int hausdorff_samples = 100000; // random surface samples per direction (plus all vertices)
+  uint32_t seed = 1;
+};
+
+struct QuadMetrics {
+  QuadTopology topology;
+  int irregular_vertices = 0;        // irregular_interior + irregular_boundary
+  double min_scaled_jacobian = 1;    // over all quad corners, w.r.t. the quad's own normal
+  double mean_angle_deviation = 0;   // degrees, |corner angle - 90| over all corners
+  double p95_angle_deviation = 0;    // degrees, 95th percentile
+  int flipped_quads = 0;             // quad normal (of its diagonals) against the mean reference
+                                     // normal at the closest points of five interior points
+  double hausdorff = 0;              // max of the two directions, relative to the bbox diagonal
+  double hausdorff_quads_to_mesh = 0;
+  double hausdorff_mesh_to_quads = 0;
+};
+
+// reference: the triangle surface the quads approximate (normals for flips, Hausdorff distance).
+QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
+                                 Progress& progress);
+
+// The report object `quad`: {faces, vertices, irregular_vertices, ...metrics}.
+Json quad_report_json(const QuadMetrics& metrics);
+
+}  // namespace qgp

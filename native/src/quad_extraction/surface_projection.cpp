@@ -1,0 +1,142 @@
+#include "quad_extraction/surface_projection.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace qgp {
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Voronoi regions of the vertices, edges and face (as in Ericson, Real-Time Collision Detection).
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double denom = d1 - d3;
+    return denom > 0 ? Vec3(a + (d1 / denom) * ab) : a;
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double denom = d2 - d6;
+    return denom > 0 ? Vec3(a + (d2 / denom) * ac) : a;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double denom = (d4 - d3) + (d5 - d6);
+    return denom > 0 ? Vec3(b + ((d4 - d3) / denom) * (c - b)) : b;
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) {
+    // Degenerate (collinear) triangle: the best of its three edges.
+    auto on_segment = [&](const Vec3& s, const Vec3& t) {
+      const Vec3 d = t - s;
+      const double len2 = d.squaredNorm();
+      const double u = len2 > 0 ? std::clamp((p - s).dot(d) / len2, 0.0, 1.0) : 0.0;
+      return Vec3(s + u * d);
+    };
+    Vec3 best = on_segment(a, b);
+    for (const Vec3& q : {on_segment(b, c), on_segment(c, a)})
+      if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
+    return best;
+  }
+  const double v = vb / sum, w = vc / sum;
+  return a + ab * v + ac * w;
+}
+
+TriangleBvh::TriangleBvh(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
+                         std::vector<std::array<int, 3>> triangles)
+    : triangles_(std::move(triangles)) {
+  vertices_.resize(V.rows());
+  for (int v = 0; v < V.rows(); ++v) vertices_[v] = V.row(v).transpose();
+  std::vector<Vec3> centroids(triangles_.size());
+  for (size_t t = 0; t < triangles_.size(); ++t)
+    centroids[t] = (vertices_[triangles_[t][0]] + vertices_[triangles_[t][1]] + vertices_[triangles_[t][2]]) / 3.0;
+  order_.resize(triangles_.size());
+  for (size_t t = 0; t < order_.size(); ++t) order_[t] = static_cast<int>(t);
+  nodes_.reserve(triangles_.size() / 2 + 1);
+  if (!triangles_.empty()) build(0, static_cast<int>(order_.size()), centroids);
+}
+
+static std::vector<std::array<int, 3>> triangles_of(const TriMesh& mesh) {
+  std::vector<std::array<int, 3>> t(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) t[f] = {mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)};
+  return t;
+}
+
+TriangleBvh::TriangleBvh(const TriMesh& mesh) : TriangleBvh(mesh.V, triangles_of(mesh)) {}
+
+int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroids) {
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.push_back(Node{});
+  Eigen::AlignedBox3d box, cbox;
+  for (int i = begin; i < end; ++i) {
+    for (int k = 0; k < 3; ++k) box.extend(vertices_[triangles_[order_[i]][k]]);
+    cbox.extend(centroids[order_[i]]);
+  }
+  nodes_[id].box = box;
+  if (end - begin <= 4) {
+    nodes_[id].begin = begin, nodes_[id].end = end;
+    return id;
+  }
+  int axis = 0;
+  cbox.sizes().maxCoeff(&axis);
+  const int mid = (begin + end) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](int x, int y) { return centroids[x][axis] < centroids[y][axis]; });
+  const int left = build(begin, mid, centroids);
+  const int right = build(mid, end, centroids);
+  nodes_[id].left = left, nodes_[id].right = right;
+  return id;
+}
+
+TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
+  Hit best;
+  best.squared_distance = std::numeric_limits<double>::infinity();
+  if (nodes_.empty()) return best;
+  // Depth-first, nearer child first, pruning boxes farther than the best hit.
+  std::vector<int> stack{0};
+  stack.reserve(64);
+  while (!stack.empty()) {
+    const Node& node = nodes_[stack.back()];
+    stack.pop_back();
+    if (node.box.squaredExteriorDistance(p) >= best.squared_distance) continue;
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const auto& t = triangles_[order_[i]];
+        const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
+        const double d = (q - p).squaredNorm();
+        if (d < best.squared_distance) best = Hit{order_[i], q, d};
+      }
+      continue;
+    }
+    const double dl = nodes_[node.left].box.squaredExteriorDistance(p);
+    const double dr = nodes_[node.right].box.squaredExteriorDistance(p);
+    if (dl < dr) {
+      stack.push_back(node.right), stack.push_back(node.left);
+    } else {
+      stack.push_back(node.left), stack.push_back(node.right);
+    }
+  }
+  return best;
+}
+
+void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progress) {
+  const TriangleBvh bvh(target);
+  quads.vertex_face.assign(quads.V.rows(), -1);
+  for (int v = 0; v < quads.V.rows(); ++v) {
+    if ((v & 1023) == 0) progress.check_cancel();
+    const TriangleBvh::Hit hit = bvh.closest_point(quads.V.row(v).transpose());
+    if (hit.triangle < 0) continue;
+    quads.V.row(v) = hit.point.transpose();
+    quads.vertex_face[v] = hit.triangle;
+  }
+  quads.quad_face.clear();
+}
+
+}  // namespace qgp

@@ -1,0 +1,51 @@
+// Closest points on a triangle surface (axis-aligned bounding-box tree) and the projection of quad
+// vertices back onto the original surface when the working mesh was decimated.
+#pragma once
+#include <array>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/quad_mesh.h"
+
+namespace qgp {
+
+class TriangleBvh {
+ public:
+  // V: #V x 3 positions; triangles: #T vertex triples. Both are copied.
+  TriangleBvh(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
+              std::vector<std::array<int, 3>> triangles);
+  explicit TriangleBvh(const TriMesh& mesh);
+
+  struct Hit {
+    int triangle = -1;      // index into the triangle list (the face index for a TriMesh)
+    Vec3 point = Vec3::Zero();
+    double squared_distance = 0;
+  };
+  // Closest point of the surface to p (triangle -1 if the surface is empty).
+  Hit closest_point(const Vec3& p) const;
+
+  int num_triangles() const { return static_cast<int>(triangles_.size()); }
+
+ private:
+  struct Node {
+    Eigen::AlignedBox3d box;
+    int left = -1, right = -1;  // children, or -1 for a leaf
+    int begin = 0, end = 0;     // leaf: order_[begin..end)
+  };
+  int build(int begin, int end, std::vector<Vec3>& centroids);
+
+  std::vector<Vec3> vertices_;
+  std::vector<std::array<int, 3>> triangles_;
+  std::vector<int> order_;
+  std::vector<Node> nodes_;
+};
+
+// Closest point to p on triangle (a, b, c), exact up to rounding, degenerate triangles included.
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Moves every quad vertex onto its closest point of `target` (the original, finer surface) and
+// sets vertex_face to the target triangle (quad_face is cleared: it referred to the working mesh).
+void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progress);
+
+}  // namespace qgp

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian packages the project needs. Idempotent; needs root or sudo.
+set -euo pipefail
+
+PACKAGES=(
+  cmake g++ make pkg-config            # build
+  clang libclang-rt-14-dev             # fuzzing (libFuzzer) and sanitizers
+  libeigen3-dev libopenmesh-dev coinor-libipopt-dev libsuitesparse-dev libgmp-dev nlohmann-json3-dev
+  libgtest-dev                         # tests
+  blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
+  patchelf zip unzip                   # extension packaging
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} Debian packages present"
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "setup: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+echo "setup: done"

@@ -1,0 +1,167 @@
+"""The add-on in Blender (blender -b --factory-startup --python-exit-code 1 --python THIS -- --meshes DIR):
+installed from the built legacy zip into a temporary user scripts directory (BLENDER_USER_SCRIPTS),
+enabled, then exercised through its operators, panel, menu and batch runner."""
+import glob
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import bpy
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+MESHES = ARGS[ARGS.index("--meshes") + 1] if "--meshes" in ARGS else os.path.join(REPO, "..", "shared", "meshes")
+MODULE = "quantized_retopo"
+
+
+def install_addon():
+    zips = sorted(glob.glob(os.path.join(REPO, "dist", MODULE + "-*-legacy.zip")))
+    assert zips, "build the zips first (scripts/build_extension.py)"
+    user_scripts = os.environ.get("BLENDER_USER_SCRIPTS")
+    assert user_scripts and bpy.utils.user_resource("SCRIPTS").startswith(user_scripts), \
+        "the add-on must be installed into a temporary user scripts directory"
+    bpy.ops.preferences.addon_install(filepath=zips[-1], overwrite=True)
+    bpy.ops.preferences.addon_enable(module=MODULE)
+    assert MODULE in bpy.context.preferences.addons, "add-on not enabled"
+    installed = os.path.join(bpy.utils.user_resource("SCRIPTS"), "addons", MODULE)
+    assert os.path.exists(os.path.join(installed, "lib", "libqgp.so")), "native library not installed"
+    return sys.modules[MODULE]
+
+
+def reset_scene():
+    """Empties the scene (read_factory_settings would also disable the add-on)."""
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    for mesh in list(bpy.data.meshes):
+        bpy.data.meshes.remove(mesh)
+
+
+def scene_state():
+    """Everything an operator could change: objects, their data, selection, UV layers, seams."""
+    state = []
+    for obj in sorted(bpy.data.objects, key=lambda o: o.name):
+        entry = [obj.name, obj.type, obj.select_get(), obj.hide_get(), tuple(map(tuple, obj.matrix_world))]
+        if obj.type == "MESH":
+            m = obj.data
+            entry += [len(m.vertices), len(m.polygons), [l.name for l in m.uv_layers],
+                      hash(tuple(v.co[:] for v in m.vertices)), sum(e.use_seam for e in m.edges)]
+        state.append(entry)
+    return state, len(bpy.data.meshes)
+
+
+def import_mesh(binding, name):
+    vertices, sizes, corners = binding.read_mesh_file(os.path.join(MESHES, name))
+    starts = [0]
+    for n in sizes.tolist():
+        starts.append(starts[-1] + n)
+    flat = corners.tolist()
+    mesh = bpy.data.meshes.new(name.split(".")[0])
+    mesh.from_pydata(vertices.tolist(), [], [flat[starts[i]:starts[i + 1]] for i in range(len(sizes))])
+    obj = bpy.data.objects.new(mesh.name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def expect_operator_error(op, **kwargs):
+    before = scene_state()
+    try:
+        op(**kwargs)
+    except RuntimeError as e:
+        message = str(e)
+    else:
+        raise AssertionError(f"{op} should have reported an error")
+    assert scene_state() == before, f"{op} changed the scene although it failed"
+    return message
+
+
+def test_registration():
+    assert hasattr(bpy.types, "OBJECT_OT_qgp_quad_remesh") and hasattr(bpy.types, "OBJECT_OT_qgp_grid_uv")
+    assert "REGISTER" in bpy.types.OBJECT_OT_qgp_quad_remesh.bl_options
+    assert "UNDO" in bpy.types.OBJECT_OT_qgp_grid_uv.bl_options
+    assert hasattr(bpy.types, "VIEW3D_PT_qgp_retopo")
+    assert bpy.types.VIEW3D_PT_qgp_retopo.bl_category == "Retopo"
+    assert hasattr(bpy.context.scene, "qgp_settings")
+    draw_funcs = getattr(bpy.types.VIEW3D_MT_object.draw, "_draw_funcs", [])
+    assert any(getattr(f, "__module__", "").startswith(MODULE) for f in draw_funcs), "Object menu entry missing"
+    print("registration: OK")
+
+
+def test_broken_inputs(binding):
+    for name in ("truck.obj", "cycloidal.ply"):
+        reset_scene()
+        obj = import_mesh(binding, name)
+        message = expect_operator_error(bpy.ops.object.qgp_quad_remesh, target_faces=500)
+        assert "non-manifold edge" in message, message
+        message = expect_operator_error(bpy.ops.object.qgp_grid_uv, target_faces=500)
+        assert "non-manifold edge" in message, message
+        assert "QGP Grid" not in obj.data.uv_layers
+        print(f"{name}: refused without changes: {message[:70]}")
+    # An object without faces.
+    reset_scene()
+    mesh = bpy.data.meshes.new("empty")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0)], [(0, 1)], [])
+    obj = bpy.data.objects.new("empty", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    message = expect_operator_error(bpy.ops.object.qgp_quad_remesh)
+    assert "no faces" in message, message
+    print("empty mesh: refused")
+
+
+def test_cancel_leaves_scene_unchanged(binding):
+    """A native job cancelled mid-way: nothing reaches the scene (operators only touch it on success)."""
+    reset_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=400, ring_count=200)
+    obj = bpy.context.active_object
+    before = scene_state()
+    from importlib import import_module
+    source = import_module(MODULE + ".blender_mesh").SourceMesh(bpy.context, obj, True, True)
+    session = binding.Session(source.vertices, source.triangles)
+    session.start(binding.JOB_REMESH)
+    session.cancel()
+    try:
+        session.wait()
+        cancelled = False
+    except binding.QGPError as e:
+        cancelled = e.code in (binding.ERR_CANCELLED, binding.ERR_NOT_BUILT)
+    session.close()
+    assert cancelled, "cancel did not stop the job"
+    assert scene_state() == before
+    print("cancel: scene unchanged")
+
+
+def test_batch():
+    out = tempfile.mkdtemp(prefix="qgp_batch_")
+    inputs = [os.path.join(MESHES, n) for n in ("truck.obj", "cycloidal.ply")]
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
+                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "300"],
+                          capture_output=True, text=True)
+    report = json.load(open(os.path.join(out, "report.json")))
+    assert proc.returncode != 0, "batch must exit non-zero when an input fails"
+    assert [os.path.basename(e["input"]) for e in report["entries"]] == ["truck.obj", "cycloidal.ply"]
+    for e in report["entries"]:
+        assert e["status"] == "error" and "non-manifold" in e["reason"], e
+        assert set(e) >= {"status", "reason", "quads", "seconds"}
+    print("batch: failures recorded, continued past them")
+
+
+def main():
+    addon = install_addon()
+    from importlib import import_module
+    binding = import_module(MODULE + ".core.binding")
+    print("installed", addon.__file__, "library", binding.version())
+    test_registration()
+    test_broken_inputs(binding)
+    test_cancel_leaves_scene_unchanged(binding)
+    test_batch()
+    print("add-on test: OK")
+
+
+main()

@@ -1,0 +1,47 @@
+// Fuzzes the C API array entry point: arbitrary vertices (NaN, huge, duplicates) and triangles
+// (out of range, repeated, non-manifold) through a full intake job.
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "qgp/qgp.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 2) return 0;
+  const int nv = data[0] % 32, raw_index_range = nv + 2;
+  size_t pos = 2;
+  const bool raw_doubles = data[1] & 1;
+  std::vector<double> vertices;
+  for (int i = 0; i < 3 * nv; ++i) {
+    if (raw_doubles && pos + 8 <= size) {
+      double d;
+      std::memcpy(&d, data + pos, 8);
+      vertices.push_back(d);
+      pos += 8;
+    } else {
+      vertices.push_back(pos < size ? static_cast<double>(static_cast<int8_t>(data[pos++])) : 0.0);
+    }
+  }
+  std::vector<int32_t> triangles;
+  while (pos + 3 <= size) {
+    for (int k = 0; k < 3; ++k) triangles.push_back(static_cast<int32_t>(data[pos++] % raw_index_range) - 1);
+  }
+  qgp_session* s = nullptr;
+  if (qgp_session_create(vertices.data(), nv, triangles.data(), static_cast<int64_t>(triangles.size() / 3), &s) != QGP_OK)
+    return 0;
+  if (data[1] & 2) qgp_session_set_option(s, "drop_bad_components", 1);
+  if (qgp_job_start(s, QGP_JOB_INTAKE) == QGP_OK) {
+    int state = 0;
+    qgp_job_wait(s, -1, &state);
+    int64_t nvo = 0, nfo = 0, nco = 0;
+    if (qgp_intake_counts(s, &nvo, &nfo, &nco) == QGP_OK) {
+      std::vector<double> v(3 * nvo);
+      std::vector<int32_t> f(3 * nfo), c(nfo), iv(nvo);
+      qgp_intake_fetch(s, v.data(), f.data(), c.data(), iv.data());
+    }
+    int64_t needed = 0;
+    qgp_report_json(s, nullptr, 0, &needed);
+  }
+  qgp_session_free(s);
+  return 0;
+}

@@ -1,0 +1,275 @@
+// The C API as the add-on uses it: sessions from arrays, jobs on the worker thread, poll,
+// cancel, wait, fetch, report, free; every error a code with a message, never a crash.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/json.h"
+#include "qgp/qgp.h"
+
+namespace {
+
+struct Grid {
+  std::vector<double> vertices;
+  std::vector<int32_t> triangles;
+};
+
+// n x n squares in the plane, two triangles each.
+Grid make_grid(int n) {
+  Grid g;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) g.vertices.insert(g.vertices.end(), {double(i), double(j), 0.0});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      g.triangles.insert(g.triangles.end(), {a, b, c, a, c, d});
+    }
+  return g;
+}
+
+qgp_session* create(const Grid& g) {
+  qgp_session* s = nullptr;
+  EXPECT_EQ(qgp_session_create(g.vertices.data(), g.vertices.size() / 3, g.triangles.data(),
+                               g.triangles.size() / 3, &s),
+            QGP_OK);
+  return s;
+}
+
+std::string report_of(qgp_session* s) {
+  int64_t needed = 0;
+  EXPECT_EQ(qgp_report_json(s, nullptr, 0, &needed), QGP_OK);
+  std::string buffer(static_cast<size_t>(needed), '\0');
+  EXPECT_EQ(qgp_report_json(s, buffer.data(), needed, &needed), QGP_OK);
+  buffer.resize(static_cast<size_t>(needed - 1));
+  return buffer;
+}
+
+// Runs an intake job to the end and returns its status.
+int run_intake(qgp_session* s) {
+  EXPECT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
+  int state = -1;
+  return qgp_job_wait(s, -1, &state);
+}
+
+TEST(CApi, VersionAndNullArguments) {
+  EXPECT_STRNE(qgp_version(), "");
+  EXPECT_EQ(qgp_session_create(nullptr, 3, nullptr, 1, nullptr), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_last_error()), "");
+  qgp_session* s = nullptr;
+  EXPECT_EQ(qgp_session_create(nullptr, 3, nullptr, 1, &s), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(s, nullptr);
+  EXPECT_EQ(qgp_job_start(nullptr, QGP_JOB_INTAKE), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_job_poll(nullptr, nullptr, nullptr, nullptr, 0), QGP_ERR_INVALID_ARGUMENT);
+  qgp_session_free(nullptr);  // allowed
+}
+
+TEST(CApi, IntakeJobPollFetchReport) {
+  const Grid g = make_grid(10);
+  qgp_session* s = create(g);
+  ASSERT_NE(s, nullptr);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
+  int state = QGP_STATE_RUNNING;
+  char stage[64];
+  double fraction = -1;
+  for (int i = 0; i < 10000 && state == QGP_STATE_RUNNING; ++i) {
+    ASSERT_EQ(qgp_job_poll(s, &state, &fraction, stage, sizeof stage), QGP_OK);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(state, QGP_STATE_DONE);
+  EXPECT_EQ(fraction, 1.0);
+  int64_t nv = 0, nf = 0, nc = 0;
+  ASSERT_EQ(qgp_intake_counts(s, &nv, &nf, &nc), QGP_OK);
+  EXPECT_EQ(nv, 121);
+  EXPECT_EQ(nf, 200);
+  EXPECT_EQ(nc, 1);
+  std::vector<double> v(3 * nv);
+  std::vector<int32_t> f(3 * nf), comp(nf), input_vertex(nv);
+  ASSERT_EQ(qgp_intake_fetch(s, v.data(), f.data(), comp.data(), input_vertex.data()), QGP_OK);
+  EXPECT_EQ(v, g.vertices);
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["status"], "ok");
+  EXPECT_EQ(report["input"]["components"], 1);
+  EXPECT_EQ(report["input"]["boundary_loops"][0], 1);
+  EXPECT_TRUE(report["timings_s"].contains("total"));
+  // Truncating report buffer: NUL-terminated, needed stays the full size.
+  char small[8];
+  int64_t needed = 0;
+  EXPECT_EQ(qgp_report_json(s, small, sizeof small, &needed), QGP_OK);
+  EXPECT_EQ(std::string(small).size(), 7u);
+  EXPECT_GT(needed, 8);
+  qgp_session_free(s);
+}
+
+struct BadCase {
+  const char* what;
+  Grid grid;
+  const char* expect_in_message;
+};
+
+TEST(CApi, BadMeshesGiveClearErrors) {
+  std::vector<BadCase> cases;
+  Grid nan = make_grid(2);
+  nan.vertices[4] = std::nan("");
+  cases.push_back({"NaN coordinate", nan, "non-finite"});
+  Grid range = make_grid(2);
+  range.triangles[5] = 99;
+  cases.push_back({"index out of range", range, "refers to vertex 99"});
+  Grid negative = make_grid(2);
+  negative.triangles[0] = -4;
+  cases.push_back({"negative index", negative, "refers to vertex -4"});
+  Grid repeated = make_grid(2);
+  repeated.triangles[1] = repeated.triangles[0];
+  cases.push_back({"repeated vertex", repeated, "repeats vertex"});
+  Grid empty = make_grid(2);
+  empty.triangles.clear();
+  cases.push_back({"no faces", empty, "no faces"});
+  for (const BadCase& c : cases) {
+    qgp_session* s = create(c.grid);
+    ASSERT_NE(s, nullptr) << c.what;
+    EXPECT_EQ(run_intake(s), QGP_ERR_INVALID_MESH) << c.what;
+    const std::string message = qgp_session_error(s);
+    EXPECT_NE(message.find(c.expect_in_message), std::string::npos) << c.what << ": " << message;
+    const auto report = qgp::Json::parse(report_of(s));
+    EXPECT_EQ(report["status"], "error") << c.what;
+    EXPECT_EQ(report["error"]["code"], "invalid_mesh") << c.what;
+    int state = -1;
+    qgp_job_poll(s, &state, nullptr, nullptr, 0);
+    EXPECT_EQ(state, QGP_STATE_FAILED);
+    int64_t nv;
+    EXPECT_NE(qgp_intake_counts(s, &nv, nullptr, nullptr), QGP_OK) << "no result after a failed intake";
+    qgp_session_free(s);
+  }
+}
+
+TEST(CApi, OptionsAreValidated) {
+  qgp_session* s = create(make_grid(2));
+  EXPECT_EQ(qgp_session_set_option(s, "target_faces", 500), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option(s, "edge_length", 0.1), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option(s, "sharp_angle", 40), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option(s, "no_such_option", 1), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_session_error(s)).find("no_such_option"), std::string::npos);
+  EXPECT_EQ(qgp_session_set_option(s, "sharp_angle", std::nan("")), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_session_set_option_string(s, "quantizer", "round"), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option_string(s, "quantizer", "magic"), QGP_ERR_INVALID_ARGUMENT);
+  const int32_t good[4] = {0, 1, 1, 2}, bad[2] = {0, 100};
+  EXPECT_EQ(qgp_session_set_features(s, good, 2), QGP_OK);
+  EXPECT_EQ(qgp_session_set_features(s, bad, 1), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_job_start(s, 42), QGP_ERR_INVALID_ARGUMENT);
+  qgp_session_free(s);
+}
+
+// A large mesh keeps the worker busy long enough to cancel, poll and free it mid-job.
+const Grid& big_grid() {
+  static const Grid g = make_grid(900);  // 1.6 M triangles
+  return g;
+}
+
+TEST(CApi, CancelTakesEffectWithinOneSecond) {
+  qgp_session* s = create(big_grid());
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(qgp_job_cancel(s), QGP_OK);
+  int state = -1;
+  const int status = qgp_job_wait(s, 5.0, &state);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("cancel: state %d after %.3f s\n", state, seconds);
+  if (state == QGP_STATE_CANCELLED) {
+    EXPECT_EQ(status, QGP_ERR_CANCELLED);
+#ifndef QGP_SANITIZED  // sanitizer builds run several times slower; the figure is printed above
+    EXPECT_LT(seconds, 1.0);
+#endif
+  } else {
+    // The job may have finished before the cancel arrived; it must then be complete.
+    EXPECT_EQ(state, QGP_STATE_DONE);
+  }
+  // A cancelled session can run again.
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  qgp_session_free(s);
+}
+
+TEST(CApi, PollFromAnotherThreadAndFreeWhileRunning) {
+  qgp_session* s = create(big_grid());
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
+  EXPECT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_ERR_BUSY);
+  EXPECT_EQ(qgp_session_set_option(s, "target_faces", 10), QGP_ERR_BUSY);
+  std::atomic<int> polls{0};
+  std::thread poller([&] {
+    int state = QGP_STATE_RUNNING;
+    char stage[32];
+    while (state == QGP_STATE_RUNNING) {
+      qgp_job_poll(s, &state, nullptr, stage, sizeof stage);
+      ++polls;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+  });
+  poller.join();
+  EXPECT_GT(polls.load(), 0);
+  // Start again and free immediately: free cancels and joins.
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
+  qgp_session_free(s);
+}
+
+TEST(CApi, RemeshReportsTheStageThatIsMissing) {
+  qgp_session* s = create(make_grid(6));
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  int state = -1;
+  const int status = qgp_job_wait(s, -1, &state);
+  if (status != QGP_OK) {
+    EXPECT_EQ(state, QGP_STATE_FAILED);
+    const std::string message = qgp_session_error(s);
+    EXPECT_FALSE(message.empty());
+    const auto report = qgp::Json::parse(report_of(s));
+    EXPECT_EQ(report["status"], "error");
+    EXPECT_EQ(report["error"]["message"], message);
+  }
+  qgp_session_free(s);
+}
+
+TEST(CApi, ResultsAreNotReadyBeforeAJobProducesThem) {
+  qgp_session* s = create(make_grid(3));
+  int64_t nv = -1, nq = -1, ncut = -1;
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
+  EXPECT_EQ(qgp_result_uv_counts(s, &ncut), QGP_ERR_NOT_READY);
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
+  EXPECT_NE(std::string(qgp_session_error(s)).find("remesh"), std::string::npos);
+  qgp_session_free(s);
+}
+
+TEST(CApi, SoupReaderKeepsPolygons) {
+  qgp_soup* soup = nullptr;
+  ASSERT_EQ(qgp_soup_read((std::string(QGP_MESH_DIR) + "/torus.obj").c_str(), &soup), QGP_OK);
+  int64_t nv = 0, nf = 0, nc = 0;
+  ASSERT_EQ(qgp_soup_counts(soup, &nv, &nf, &nc), QGP_OK);
+  EXPECT_EQ(nv, 2304);
+  EXPECT_EQ(nf, 4608);
+  std::vector<double> v(3 * nv);
+  std::vector<int32_t> sizes(nf), corners(nc);
+  ASSERT_EQ(qgp_soup_fetch(soup, v.data(), sizes.data(), corners.data()), QGP_OK);
+  int64_t total = 0;
+  for (int32_t n : sizes) total += n;
+  EXPECT_EQ(total, nc);
+  qgp_soup_free(soup);
+  EXPECT_EQ(qgp_soup_read("/nonexistent.ply", &soup), QGP_ERR_UNREADABLE_FILE);
+  EXPECT_EQ(soup, nullptr);
+}
+
+TEST(CApi, CreateFromFile) {
+  qgp_session* s = nullptr;
+  ASSERT_EQ(qgp_session_create_from_file((std::string(QGP_MESH_DIR) + "/torus.obj").c_str(), &s), QGP_OK);
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["input"]["genus"][0], 1);
+  qgp_session_free(s);
+  EXPECT_EQ(qgp_session_create_from_file("/nonexistent.obj", &s), QGP_ERR_UNREADABLE_FILE);
+  EXPECT_NE(std::string(qgp_last_error()).find("does not exist"), std::string::npos);
+}
+
+}  // namespace
