@@ -372,6 +372,52 @@ TEST(QuantizationValidity, PolycubeLayerCollapseIsInvalid) {
   EXPECT_FALSE(check_quantization_validity(tm, x).valid);
 }
 
+TEST(QuantizationValidity, IncrementalTestAgreesWithTheFullTest) {
+  // Random walks through consistent quantizations (adding/subtracting generating vectors at coarse
+  // lengths, so that zero edges and collapses are frequent): after every change the incremental
+  // test must give the full test's answer; valid states are committed.
+  int invalid = 0, checks = 0;
+  for (const Family& family : families()) {
+    for (unsigned seed = 1; seed <= 2; ++seed) {
+      const TMesh tm = family.make(80, seed);
+      const CellSystem sys(tm);
+      GeneratingVectorSearch search(sys);
+      ValidityChecker incremental(sys), full(sys);
+      std::mt19937 rng(seed);
+      std::vector<int64_t> x(tm.edges.size(), 1);
+      // Start from an all-positive consistent x: one generating vector through every edge.
+      std::fill(x.begin(), x.end(), 0);
+      std::vector<double> weight(tm.edges.size(), 1.0);
+      std::vector<int> dnodes;
+      for (int e = 0; e < static_cast<int>(x.size()); ++e)
+        if (x[e] == 0 && search.find(e, weight, dnodes, nullptr))
+          for (int n : dnodes) ++x[n / 2];
+      ASSERT_TRUE(incremental.commit_full(x).valid);
+      for (int step = 0; step < 400; ++step) {
+        const int e = std::uniform_int_distribution<int>(0, static_cast<int>(x.size()) - 1)(rng);
+        const int sign = std::uniform_int_distribution<int>(0, 3)(rng) == 0 ? +1 : -1;
+        for (size_t f = 0; f < x.size(); ++f)
+          weight[f] = sign < 0 && x[f] == 0 ? std::numeric_limits<double>::infinity()
+                                            : std::uniform_real_distribution<double>(0.5, 1.5)(rng);
+        if (!search.find(e, weight, dnodes, nullptr)) continue;
+        std::vector<int64_t> y = x;
+        std::vector<int> changed;
+        for (int n : dnodes) y[n / 2] += sign, changed.push_back(n / 2);
+        if (*std::min_element(y.begin(), y.end()) < 0) continue;
+        ASSERT_TRUE(consistent(tm, y));
+        const bool expected = full.check(y).valid;
+        const bool got = incremental.check_changed(y, changed, nullptr, true).valid;
+        ASSERT_EQ(got, expected) << family.name << " seed " << seed << " step " << step;
+        ++checks;
+        if (got) x = y;
+        else ++invalid;
+      }
+    }
+  }
+  EXPECT_GT(checks, 300);
+  EXPECT_GT(invalid, 20) << checks;  // the walk does reach invalid states
+}
+
 TEST(QuantizationValidity, RejectsInconsistentInput) {
   const TMesh tm = feature_rectangle();
   std::vector<int64_t> x = grid_lengths(tm, {2, 3, 2, 2}, {2, 3});
