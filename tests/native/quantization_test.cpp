@@ -8,13 +8,16 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <set>
 
 #include "core/error.h"
 #include "quantization/cell_system.h"
 #include "quantization/generating_vectors.h"
 #include "quantization/quantization.h"
+#include "quantization/round_quantization.h"
 #include "quantization/synthetic_tmesh.h"
 #include "quantization/validity.h"
+#include "test_support.h"
 
 namespace qgp {
 namespace {
@@ -532,6 +535,115 @@ TEST(Quantization, CoarseScalesProduceZeroEdgesAndStayValid) {
       EXPECT_GT(r.zero_edges, 0) << family.name;
     }
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The `round` baseline's map: independent variables rounded, the map solved again.
+
+std::vector<char> cube_crease_edges(const TriMesh& mesh) {
+  std::vector<char> crease(mesh.num_edges(), 0);
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o >= 0)
+      crease[e] = mesh.face_normal_unnormalized(h / 3).normalized().dot(mesh.face_normal_unnormalized(o / 3).normalized()) < 0.5;
+  }
+  return crease;
+}
+
+TEST(RoundQuantization, CubeSidesRoundAndTheMapIsSolvedAgain) {
+  const auto cube = test::make_grid_cube(4);
+  const std::vector<char> creases = cube_crease_edges(cube.mesh);
+  const std::vector<char> snap = independent_vertices(cube.mesh, cube.param, TMesh{});
+  EXPECT_EQ(std::count(snap.begin(), snap.end(), 1), 8);  // the corners
+  const RoundedMap m = round_parametrization(cube.mesh, cube.param, creases, snap, 0.6, 20);
+  EXPECT_EQ(m.unresolved_equations, 0);
+  EXPECT_EQ(exact_transition_residual(cube.mesh, m.param), 0);
+  EXPECT_EQ(m.flipped_triangles, 0);
+  EXPECT_EQ(m.degenerate_triangles, 0);
+  const int64_t one = m.param.one();
+  for (int h = 0; h < cube.mesh.num_halfedges(); ++h) {
+    for (int a = 0; a < 2; ++a) EXPECT_EQ(m.param.translation[h][a] % one, 0);
+    const int v = cube.mesh.from(h);
+    if (snap[v])
+      for (int a = 0; a < 2; ++a) EXPECT_EQ(m.param.uv[h][a] % one, 0);
+  }
+  // Each side 2.4 rounds to 2 and the solve maps every side affinely onto its 2 x 2 square: the
+  // continuous coordinates (0..4 per side, scaled to 0..2.4) become exactly 0..2.
+  for (int c = 0; c < 3 * cube.mesh.num_faces(); ++c)
+    for (int a = 0; a < 2; ++a) {
+      const double expected = cube.param.uv(c, a) * 0.5;  // 4 -> 2
+      EXPECT_NEAR(m.param.to_double(m.param.uv[c][a]), expected, 1e-6);
+    }
+}
+
+TEST(RoundQuantization, TorusTranslationsRound) {
+  const auto torus = test::make_grid_torus(10, 7);
+  const std::vector<char> snap = independent_vertices(torus.mesh, torus.param, TMesh{});
+  EXPECT_EQ(std::count(snap.begin(), snap.end(), 1), 0);  // no singularity: one vertex is pinned
+  const RoundedMap m = round_parametrization(torus.mesh, torus.param, {}, snap, 0.33, 20);
+  EXPECT_EQ(m.unresolved_equations, 0);
+  EXPECT_EQ(exact_transition_residual(torus.mesh, m.param), 0);
+  EXPECT_EQ(m.flipped_triangles, 0);
+  std::set<std::array<int64_t, 2>> translations;
+  for (int h = 0; h < torus.mesh.num_halfedges(); ++h) {
+    const IVec2 t = m.param.translation[h];
+    if (t[0] != 0 || t[1] != 0) translations.insert({std::abs(t[0]) / m.param.one(), std::abs(t[1]) / m.param.one()});
+    for (int a = 0; a < 2; ++a) EXPECT_EQ(t[a] % m.param.one(), 0);
+  }
+  // 10 * 0.33 = 3.3 -> 3 and 7 * 0.33 = 2.31 -> 2.
+  EXPECT_TRUE(translations.count({3, 0}) || translations.count({0, 3}));
+  EXPECT_TRUE(translations.count({2, 0}) || translations.count({0, 2}));
+}
+
+TEST(RoundQuantization, TracerFailureCountsAsInvalidWithTheReason) {
+  const auto cube = test::make_grid_cube(3);
+  const TMesh original = build_patch_tmesh(make_polycube_layout({{0, 0, 0}}, {3}, {3}, {3}, false), 0, 1);
+  QuantizationOptions options;
+  options.scale = 0.2;  // sides 0.6 -> 1
+  Progress progress;
+  int traced = 0;
+  const RoundingResult r = quantize_by_rounding(
+      cube.mesh, cube.param, {}, original, options,
+      [&](const ExactParametrization& p, Progress&) -> TMesh {
+        ++traced;
+        EXPECT_EQ(exact_transition_residual(cube.mesh, p), 0);
+        throw Error(ErrorCode::StageFailed, "test tracer refuses");
+      },
+      progress);
+  EXPECT_EQ(traced, 1);
+  EXPECT_FALSE(r.quantization.valid);
+  EXPECT_NE(r.quantization.invalid_reason.find("test tracer refuses"), std::string::npos);
+  EXPECT_EQ(quantization_report(r.quantization)["method"], "round");
+  EXPECT_TRUE(quantization_report(r.quantization)["objective"].is_null());
+}
+
+TEST(RoundQuantization, LengthsAreReadOffTheRetracedTMesh) {
+  // Tracer stand-ins returning box T-meshes: integer lengths are read and checked; a T-mesh with a
+  // non-integer length (an isoline that was not rounded) is reported as invalid.
+  const auto cube = test::make_grid_cube(2);
+  const TMesh original = build_patch_tmesh(make_polycube_layout({{0, 0, 0}}, {2}, {2}, {2}, false), 0, 1);
+  QuantizationOptions options;
+  options.scale = 0.8;  // sides 1.6 -> 2
+  Progress progress;
+  const RoundingResult r = quantize_by_rounding(
+      cube.mesh, cube.param, {}, original, options,
+      [&](const ExactParametrization&, Progress&) {
+        return build_patch_tmesh(make_polycube_layout({{0, 0, 0}}, {2}, {2}, {2}, false), 0, 1);
+      },
+      progress);
+  EXPECT_TRUE(r.quantization.valid) << r.quantization.invalid_reason;
+  EXPECT_EQ(r.quantization.quads_expected, 24);
+  EXPECT_EQ(r.quantization.x, std::vector<int64_t>(12, 2));
+  const RoundingResult bad = quantize_by_rounding(
+      cube.mesh, cube.param, {}, original, options,
+      [&](const ExactParametrization&, Progress&) {
+        PatchLayout layout = make_polycube_layout({{0, 0, 0}}, {5}, {4}, {4}, false);
+        layout.unit = 0.5;
+        return build_patch_tmesh(layout, 0, 1);
+      },
+      progress);
+  EXPECT_FALSE(bad.quantization.valid);
+  EXPECT_NE(bad.quantization.invalid_reason.find("non-integer"), std::string::npos);
 }
 
 // ---------------------------------------------------------------------------------------------
