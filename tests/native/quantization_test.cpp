@@ -683,6 +683,18 @@ TEST(Quantization, MalformedTMeshIsRefusedWithAnError) {
   EXPECT_THROW(quantize(single_t_junction(13, 31, 14, 28), options, progress), Error);
 }
 
+TEST(Quantization, StageTwoTimeLimitReturnsAValidQuantization) {
+  const TMesh tm = families()[0].make(400, 3);
+  QuantizationOptions options;
+  options.scale = quantization_scale_for_quads(tm, 3000);
+  options.stage2_time_limit = 1e-9;
+  Progress progress;
+  const QuantizationResult r = quantize(tm, options, progress);
+  EXPECT_FALSE(r.stage2_converged);
+  EXPECT_EQ(r.stage2_steps, 0);
+  expect_result_invariants(tm, r, "time limit");
+}
+
 TEST(Quantization, CancelStopsWithCancelledError) {
   const TMesh tm = families()[1].make(500, 1);
   std::atomic<bool> cancel{true};

@@ -27,6 +27,9 @@ struct QuantizationOptions {
   // Ideal lengths below this (in quad units) are raised to it in the objective and the weights, so
   // that edges of zero continuous length get a finite, very large penalty for x > 0.
   double min_ideal_length = 1e-3;
+  // Stage II may stop early: the quantization is valid after every step (paper §8). Seconds of
+  // stage II after which it stops; 0: run until no generating vector improves (deterministic).
+  double stage2_time_limit = 0;
   // Tests: recompute the full objective from scratch after every accepted stage II step (O(#edges)
   // each) instead of recording the incrementally updated value.
   bool recompute_objective_each_step = false;
@@ -43,6 +46,7 @@ struct QuantizationResult {
   int stage1_steps = 0;          // generating vectors added in stage I
   int stage2_steps = 0;          // accepted stage II steps (additions + subtractions)
   int stage2_additions = 0, stage2_subtractions = 0;
+  bool stage2_converged = true;     // false if stage II stopped at its time limit
   int stage2_rejected_invalid = 0;  // improving candidates rejected by the validity test
   int unreachable_edges = 0;        // edges through which no generating vector exists
   int64_t searches = 0;             // generating-vector searches run

@@ -194,10 +194,14 @@ class GreedyQuantizer {
         if (dep_seen[e] != dep_stamp) dep_seen[e] = dep_stamp, depends_[e].push_back({cand, generation_[cand], false});
     };
 
-    Timer tick;
+    Timer tick, elapsed;
     int64_t evaluated = 0;
     double fraction = 0.3;
     while (!heap_.empty()) {
+      if (options_.stage2_time_limit > 0 && elapsed.seconds() > options_.stage2_time_limit) {
+        r.stage2_converged = false;
+        break;
+      }
       const HeapEntry top = heap_.top();
       heap_.pop();
       if (top.generation != generation_[top.candidate]) continue;
@@ -392,6 +396,7 @@ Json quantization_report(const QuantizationResult& r) {
   j["zero_edges"] = r.zero_edges;
   j["stage1_steps"] = r.stage1_steps;
   j["stage2_steps"] = r.stage2_steps;
+  j["stage2_converged"] = r.stage2_converged;
   j["consistency_residual"] = r.consistency_residual;
   j["quads_expected"] = r.quads_expected;
   j["seconds"] = r.seconds;
