@@ -8,6 +8,10 @@
 // keep validity and decrease  sum_e (x(e)/x_ideal(e) - 1)^2. Generating vectors are minimum-weight
 // circuits (or boundary-to-boundary paths, §9.2) of the directed graph D, found by a bidirectional
 // Dijkstra search.
+//
+// Pipeline use (Session): the T-mesh is computed once per component; a new density only needs a
+// new scale (quantization_scale_for_quads / _for_edge_length) and a new quantize() call, then the
+// later stages. The `round` baseline is quantize_by_rounding() (round_quantization.h).
 #pragma once
 #include <cstdint>
 #include <string>
