@@ -280,6 +280,7 @@ class GreedyQuantizer {
     // Smallest weight first; on ties subtraction (even candidate) before addition, then by edge.
     bool operator<(const HeapEntry& o) const {
       if (weight != o.weight) return weight > o.weight;
+      if ((candidate & 1) != (o.candidate & 1)) return (candidate & 1) > (o.candidate & 1);
       return candidate > o.candidate;
     }
   };
