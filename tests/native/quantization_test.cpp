@@ -497,8 +497,8 @@ TEST(GeneratingVectors, ExcludedEdgesAreAvoided) {
 
 TEST(Quantization, PropertiesOnSyntheticTMeshesAtFourDensities) {
   for (const Family& family : families()) {
-    for (unsigned seed = 1; seed <= 2; ++seed) {
-      const TMesh tm = family.make(150, seed);
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      const TMesh tm = family.make(seed <= 2 ? 150 : 600, seed);
       if (family.name != "polycube") expect_tmesh_invariants(tm, family.chi);
       for (double target : {100.0, 500.0, 2000.0, 10000.0}) {
         const double scale = quantization_scale_for_quads(tm, target);
@@ -506,8 +506,9 @@ TEST(Quantization, PropertiesOnSyntheticTMeshesAtFourDensities) {
         const std::string what = family.name + " seed " + std::to_string(seed) + " target " + std::to_string(target);
         expect_result_invariants(tm, r, what);
         EXPECT_GT(r.stage1_steps, 0) << what;
-        // The quad count follows the target (loosely: coarse targets are dominated by the layout).
-        if (target >= 2000) {
+        // The quad count follows the target where cells are resolved (at coarser targets most
+        // edges are shorter than one quad and the per-edge objective rounds many of them to 0).
+        if (target >= 10.0 * tm.cells.size()) {
           EXPECT_GT(r.quads_expected, 0.6 * target) << what;
           EXPECT_LT(r.quads_expected, 1.6 * target) << what;
         }
