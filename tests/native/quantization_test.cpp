@@ -596,6 +596,47 @@ TEST(RoundQuantization, TorusTranslationsRound) {
   EXPECT_TRUE(translations.count({2, 0}) || translations.count({0, 2}));
 }
 
+TEST(RoundQuantization, OpenPatchBoundaryBecomesIntegerIsolines) {
+  // A 6 x 4 grid patch with the identity map scaled by 0.55: the boundary sides (3.3 x 2.2) round to
+  // 3 x 2; boundary edges stay isolines, now on integers; corners are the independent vertices.
+  const int nx = 6, ny = 4;
+  TriMesh mesh;
+  mesh.V.resize((nx + 1) * (ny + 1), 3);
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) mesh.V.row(j * (nx + 1) + i) << i, j, 0;
+  mesh.F.resize(2 * nx * ny, 3);
+  int f = 0;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i, b = a + 1, c = a + nx + 2, d = a + nx + 1;
+      mesh.F.row(f++) << a, b, c;
+      mesh.F.row(f++) << a, c, d;
+    }
+  build_connectivity(mesh);
+  Parametrization param;
+  param.uv.resize(3 * mesh.num_faces(), 2);
+  for (int c = 0; c < 3 * mesh.num_faces(); ++c) {
+    const Vec3 p = mesh.position(mesh.F(c / 3, c % 3));
+    param.uv.row(c) << p.x(), p.y();
+  }
+  param.rotation.assign(3 * mesh.num_faces(), 0);
+  param.is_cut.assign(mesh.num_edges(), 0);
+  std::vector<char> snap(mesh.num_vertices(), 0);
+  for (int v : {0, nx, (nx + 1) * ny, (nx + 1) * (ny + 1) - 1}) snap[v] = 1;
+  const RoundedMap m = round_parametrization(mesh, param, {}, snap, 0.55, 20);
+  EXPECT_EQ(m.unresolved_equations, 0);
+  EXPECT_EQ(m.flipped_triangles, 0);
+  const int64_t one = m.param.one();
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    if (mesh.opposite[h] >= 0) continue;
+    const IVec2 a = m.param.uv[h], b = m.param.uv[3 * (h / 3) + (h % 3 + 1) % 3];
+    const int axis = a[0] == b[0] ? 0 : 1;  // the constant coordinate
+    EXPECT_EQ(a[axis], b[axis]);
+    EXPECT_EQ(a[axis] % one, 0);
+  }
+  EXPECT_EQ(m.param.uv[3 * (mesh.num_faces() - 1) + 1], (IVec2{3 * one, 2 * one}));  // far corner (6,4)
+}
+
 TEST(RoundQuantization, TracerFailureCountsAsInvalidWithTheReason) {
   const auto cube = test::make_grid_cube(3);
   const TMesh original = build_patch_tmesh(make_polycube_layout({{0, 0, 0}}, {3}, {3}, {3}, false), 0, 1);
