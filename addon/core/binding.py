@@ -100,6 +100,8 @@ def _declare(lib):
         "qgp_soup_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
         "qgp_soup_free": (None, [vp]),
     })
+    sigs["qgp_measure_polygon_mesh"] = (c_int, [p_double, c_int64, p_int32, c_int64, p_int32, p_double, c_int64,
+                                                p_int32, c_int64, c_double, ctypes.c_char_p, c_int64, p_int64])
     optional = {
         "qgp_result_quad_counts": (c_int, [vp, p_int64, p_int64]),
         "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
@@ -139,6 +141,25 @@ def read_mesh_file(path):
         return v, sizes, corners
     finally:
         lib.qgp_soup_free(handle)
+
+
+def measure_polygon_mesh(vertices, face_sizes, corners, ref_vertices, ref_triangles, sharp_angle=-1.0):
+    """Quality figures (dict) of a polygon mesh against a reference triangle mesh (docs/report.md)."""
+    lib = load_library()
+    v = np.ascontiguousarray(vertices, np.float64).reshape(-1, 3)
+    sizes = np.ascontiguousarray(face_sizes, np.int32)
+    c = np.ascontiguousarray(corners, np.int32)
+    rv = np.ascontiguousarray(ref_vertices, np.float64).reshape(-1, 3)
+    rt = np.ascontiguousarray(ref_triangles, np.int32).reshape(-1, 3)
+    buffer = ctypes.create_string_buffer(1 << 16)
+    needed = ctypes.c_int64()
+    status = lib.qgp_measure_polygon_mesh(_ptr(v, ctypes.c_double), len(v), _ptr(sizes, ctypes.c_int32), len(sizes),
+                                          _ptr(c, ctypes.c_int32), _ptr(rv, ctypes.c_double), len(rv),
+                                          _ptr(rt, ctypes.c_int32), len(rt), float(sharp_angle), buffer,
+                                          len(buffer), ctypes.byref(needed))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    return json.loads(buffer.value.decode())
 
 
 def _ptr(array, ctype):

@@ -118,6 +118,17 @@ QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_
 QGP_API int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges);
 QGP_API int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts);
 
+/* Measures any polygon mesh (e.g. another remesher's output) against a reference triangle mesh
+ * (repaired by intake first): vertices nv x 3, face_sizes nf, corners sum(face_sizes) indices;
+ * ref_vertices nrv x 3, ref_triangles nrt x 3; sharp_angle_deg < 0 skips sharp-edge coverage.
+ * The JSON (fields in docs/report.md, "measurements") is copied into json (json_size bytes incl.
+ * the NUL); *needed gets its size; QGP_ERR_INVALID_ARGUMENT if the buffer is too small. */
+QGP_API int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes,
+                                     int64_t num_faces, const int32_t* corners, const double* ref_vertices,
+                                     int64_t num_ref_vertices, const int32_t* ref_triangles,
+                                     int64_t num_ref_triangles, double sharp_angle_deg, char* json,
+                                     int64_t json_size, int64_t* needed);
+
 /* Reading a mesh file as it is (polygons, no repair), e.g. to import it into Blender. */
 typedef struct qgp_soup qgp_soup;
 QGP_API int qgp_soup_read(const char* path, qgp_soup** out_soup);

@@ -15,6 +15,7 @@
 
 #include "core/error.h"
 #include "intake/read_mesh_file.h"
+#include "quad_extraction/polygon_metrics.h"
 #include "pipeline/session.h"
 
 struct qgp_soup {
@@ -406,6 +407,43 @@ int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
         *cuts++ = e[0];
         *cuts++ = e[1];
       }
+    return QGP_OK;
+  });
+}
+
+int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes,
+                             int64_t num_faces, const int32_t* corners, const double* ref_vertices,
+                             int64_t num_ref_vertices, const int32_t* ref_triangles, int64_t num_ref_triangles,
+                             double sharp_angle_deg, char* json, int64_t json_size, int64_t* needed) {
+  return guarded(nullptr, [&] {
+    require(num_vertices >= 0 && num_faces >= 0 && num_ref_vertices >= 0 && num_ref_triangles >= 0,
+            "counts must not be negative");
+    require((num_vertices == 0 || vertices) && (num_faces == 0 || (face_sizes && corners)) &&
+                (num_ref_vertices == 0 || ref_vertices) && (num_ref_triangles == 0 || ref_triangles),
+            "an array is null");
+    qgp::PolygonSoup mesh;
+    mesh.positions.resize(static_cast<size_t>(num_vertices));
+    for (int64_t v = 0; v < num_vertices; ++v)
+      mesh.positions[v] = qgp::Vec3(vertices[3 * v], vertices[3 * v + 1], vertices[3 * v + 2]);
+    int64_t offset = 0;
+    for (int64_t f = 0; f < num_faces; ++f) {
+      require(face_sizes[f] >= 3, "face " + std::to_string(f) + " has fewer than three corners");
+      for (int32_t k = 0; k < face_sizes[f]; ++k)
+        require(corners[offset + k] >= 0 && corners[offset + k] < num_vertices,
+                "face " + std::to_string(f) + " refers to a vertex out of range");
+      mesh.add_face(corners + offset, face_sizes[f]);
+      offset += face_sizes[f];
+    }
+    qgp::Progress progress;
+    const qgp::IntakeResult reference = qgp::run_intake(
+        qgp::soup_from_triangle_arrays(ref_vertices, num_ref_vertices, ref_triangles, num_ref_triangles),
+        qgp::IntakeOptions{}, progress);
+    const std::string text =
+        qgp::polygon_metrics_json(qgp::measure_polygon_mesh(mesh, reference.mesh, sharp_angle_deg, progress)).dump();
+    if (needed) *needed = static_cast<int64_t>(text.size()) + 1;
+    require(json != nullptr && json_size > static_cast<int64_t>(text.size()),
+            "json buffer too small: " + std::to_string(text.size() + 1) + " bytes needed");
+    std::memcpy(json, text.c_str(), text.size() + 1);
     return QGP_OK;
   });
 }

@@ -54,9 +54,6 @@ QuadTopology quad_topology(const QuadMesh& quads) {
   return t;
 }
 
-namespace {
-
-// Area-weighted random points on a triangle soup, plus every vertex.
 std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T, int count,
                                  std::mt19937& rng) {
   std::vector<Vec3> samples(V.begin(), V.end());
@@ -86,8 +83,6 @@ double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target,
   }
   return std::sqrt(worst);
 }
-
-}  // namespace
 
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
                                  Progress& progress) {

@@ -3,13 +3,16 @@
 // quality (scaled Jacobian, angle deviation), flips against the surface normals, and the two-sided
 // Hausdorff distance.
 #pragma once
+#include <array>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "core/json.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/quad_mesh.h"
+#include "quad_extraction/surface_projection.h"
 
 namespace qgp {
 
@@ -51,6 +54,12 @@ struct QuadMetrics {
 // reference: the triangle surface the quads approximate (normals for flips, Hausdorff distance).
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
                                  Progress& progress);
+
+// Area-weighted random points on a triangle soup (count of them), plus every vertex.
+std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T, int count,
+                                 std::mt19937& rng);
+// Largest distance from the samples to the surface.
+double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target, Progress& progress);
 
 // The report object `quad`: {faces, vertices, irregular_vertices, ...metrics}.
 Json quad_report_json(const QuadMetrics& metrics);
