@@ -725,6 +725,22 @@ TEST(Quantization, MalformedTMeshIsRefusedWithAnError) {
   EXPECT_THROW(quantize(single_t_junction(13, 31, 14, 28), options, progress), Error);
 }
 
+TEST(Quantization, FailureCacheBudgetDoesNotChangeTheResult) {
+  // A tiny cache budget switches to cluster-wise region records early: more searches, same steps.
+  for (const Family& family : families()) {
+    const TMesh tm = family.make(300, 5);
+    QuantizationOptions options;
+    options.scale = quantization_scale_for_quads(tm, 2500);
+    Progress progress;
+    const QuantizationResult exact = quantize(tm, options, progress);
+    options.cache_budget = 1000;
+    const QuantizationResult coarse = quantize(tm, options, progress);
+    EXPECT_EQ(coarse.x, exact.x) << family.name;
+    EXPECT_EQ(coarse.objective_history, exact.objective_history) << family.name;
+    EXPECT_GE(coarse.searches, exact.searches) << family.name;
+  }
+}
+
 TEST(Quantization, StageTwoTimeLimitReturnsAValidQuantization) {
   const TMesh tm = families()[0].make(400, 3);
   QuantizationOptions options;

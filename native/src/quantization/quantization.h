@@ -34,6 +34,10 @@ struct QuantizationOptions {
   // Stage II may stop early: the quantization is valid after every step (paper §8). Seconds of
   // stage II after which it stops; 0: run until no generating vector improves (deterministic).
   double stage2_time_limit = 0;
+  // Memory bound of the stage II failure cache, in entries (8 bytes each): beyond it the cache
+  // records explored regions per cluster of 16 edges instead of per edge (same result, more
+  // generating-vector searches).
+  int64_t cache_budget = int64_t(1) << 24;
   // Tests: recompute the full objective from scratch after every accepted stage II step (O(#edges)
   // each) instead of recording the incrementally updated value.
   bool recompute_objective_each_step = false;

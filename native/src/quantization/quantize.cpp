@@ -172,26 +172,55 @@ class GreedyQuantizer {
     const int E = system_.num_edges();
     const int num_candidates = 2 * E;  // candidate 2e: subtract at e, 2e+1: add at e
     generation_.assign(num_candidates, 0);
-    depends_.assign(E, {});
+    dependency_count_.assign(num_candidates, 0);
+    build_clusters(1);  // exact: one edge per cluster, until the memory budget is reached
+    strong_deps_.assign(E, {});
+    weak_deps_.assign(num_clusters_, {});
+    live_dependencies_ = stored_dependencies_ = 0;
     auto weight_of = [&](int cand) { return (cand & 1) ? w_plus_[cand / 2] : w_minus_[cand / 2]; };
     auto push = [&](int cand) {
       ++generation_[cand];
+      live_dependencies_ -= dependency_count_[cand];
+      dependency_count_[cand] = 0;
       const double w = weight_of(cand);
       if (w < kInf) heap_.push({w, cand, generation_[cand]});
     };
     for (int cand = 0; cand < num_candidates; ++cand) push(cand);
     std::vector<int> explored, witness, strong;
-    std::vector<uint32_t> dep_seen(E, 0);
-    uint32_t dep_stamp = 0;
+    std::vector<uint32_t> edge_seen(E, 0), cluster_seen(E, 0);
+    uint32_t seen_stamp = 0;
     // The candidate stays out of the heap until an edge in `strong` changes, or an edge in
-    // `explored` gets lighter for it.
+    // `explored` gets lighter for it (recorded per cluster of edges, to bound memory: a lighter
+    // edge anywhere in the cluster re-evaluates the candidate, which is merely conservative).
     auto remember_failure = [&](int cand) {
-      ++generation_[cand];
-      if (++dep_stamp == 0) std::fill(dep_seen.begin(), dep_seen.end(), 0), dep_stamp = 1;
+      const uint32_t gen = ++generation_[cand];
+      if (++seen_stamp == 0) {
+        std::fill(edge_seen.begin(), edge_seen.end(), 0);
+        std::fill(cluster_seen.begin(), cluster_seen.end(), 0);
+        seen_stamp = 1;
+      }
+      int64_t count = 0;
       for (int e : strong)
-        if (dep_seen[e] != dep_stamp) dep_seen[e] = dep_stamp, depends_[e].push_back({cand, generation_[cand], true});
-      for (int e : explored)
-        if (dep_seen[e] != dep_stamp) dep_seen[e] = dep_stamp, depends_[e].push_back({cand, generation_[cand], false});
+        if (edge_seen[e] != seen_stamp) edge_seen[e] = seen_stamp, strong_deps_[e].push_back({cand, gen}), ++count;
+      for (int e : explored) {
+        const int k = cluster_of_[e];
+        if (cluster_seen[k] != seen_stamp) cluster_seen[k] = seen_stamp, weak_deps_[k].push_back({cand, gen}), ++count;
+      }
+      dependency_count_[cand] = count;
+      live_dependencies_ += count;
+      stored_dependencies_ += count;
+      if (stored_dependencies_ > 4 * live_dependencies_ + (int64_t(1) << 20)) compact_dependencies();
+      if (live_dependencies_ > options_.cache_budget && num_clusters_ == E) coarsen_weak_dependencies();
+    };
+    auto invalidate_stale_and = [&](std::vector<std::pair<int, uint32_t>>& list, auto&& keep) {
+      size_t kept = 0;
+      for (const auto& d : list) {
+        if (generation_[d.first] != d.second) continue;  // stale
+        if (keep(d.first)) list[kept++] = d;
+        else push(d.first);
+      }
+      stored_dependencies_ -= static_cast<int64_t>(list.size() - kept);
+      list.resize(kept);
     };
 
     Timer tick, elapsed;
@@ -250,29 +279,85 @@ class GreedyQuantizer {
       (sign > 0 ? r.stage2_additions : r.stage2_subtractions)++;
       objective_ = options_.recompute_objective_each_step ? full_objective() : objective_ + approx;
       r.objective_history.push_back(objective_);
+      // An addition makes w- lighter (subtraction candidates), a subtraction makes w+ lighter.
+      const int lighter_parity = sign > 0 ? 0 : 1;
       for (const Change& c : changes_) {
         push(2 * c.edge);
         push(2 * c.edge + 1);
-        // An addition makes w- lighter (subtraction candidates), a subtraction makes w+ lighter.
-        const int lighter_parity = sign > 0 ? 0 : 1;
-        auto& list = depends_[c.edge];
-        size_t kept = 0;
-        for (const Dependency& d : list) {
-          if (generation_[d.candidate] != d.generation) continue;  // stale
-          if (d.strong || (d.candidate & 1) == lighter_parity) push(d.candidate);
-          else list[kept++] = d;
-        }
-        list.resize(kept);
+        invalidate_stale_and(strong_deps_[c.edge], [](int) { return false; });
+        invalidate_stale_and(weak_deps_[cluster_of_[c.edge]], [&](int cand) { return (cand & 1) != lighter_parity; });
       }
     }
     progress_.update(1);
   }
 
-  struct Dependency {
-    int candidate;
-    uint32_t generation;
-    bool strong;  // any change of the edge invalidates; else only a lighter weight does
-  };
+  // Groups of about `size` edges that are close in the T-mesh (grown through cells).
+  void build_clusters(int size) {
+    const int kClusterSize = size;
+    const int E = system_.num_edges();
+    cluster_of_.assign(E, -1);
+    num_clusters_ = 0;
+    std::vector<int> queue;
+    for (int seed = 0; seed < E; ++seed) {
+      if (cluster_of_[seed] >= 0) continue;
+      const int k = num_clusters_++;
+      int size = 0;
+      queue.assign(1, seed);
+      cluster_of_[seed] = k;
+      for (size_t q = 0; q < queue.size() && size < kClusterSize; ++q) {
+        ++size;
+        for (const EdgeSlot& sl : system_.slot[queue[q]]) {
+          if (sl.cell < 0) continue;
+          for (int o = system_.side_begin(sl.cell, 0); o < system_.side_end(sl.cell, 3); ++o) {
+            const int f = system_.occ_edge[o];
+            if (cluster_of_[f] >= 0 || static_cast<int>(queue.size()) >= kClusterSize) continue;
+            cluster_of_[f] = k;
+            queue.push_back(f);
+          }
+        }
+      }
+    }
+  }
+  // Memory bound: beyond options_.cache_budget live entries the region dependencies are kept per
+  // cluster of edges instead of per edge (a lighter edge then re-evaluates every candidate whose
+  // region touched its cluster: more searches, same results).
+  static constexpr int kCoarseClusterSize = 16;
+  void coarsen_weak_dependencies() {
+    const std::vector<int> edge_cluster_before = cluster_of_;  // identity
+    build_clusters(kCoarseClusterSize);
+    std::vector<std::vector<std::pair<int, uint32_t>>> coarse(num_clusters_);
+    for (size_t e = 0; e < weak_deps_.size(); ++e) {
+      for (const auto& d : weak_deps_[e])
+        if (generation_[d.first] == d.second) coarse[cluster_of_[edge_cluster_before[e]]].push_back(d);
+      std::vector<std::pair<int, uint32_t>>().swap(weak_deps_[e]);
+    }
+    live_dependencies_ = stored_dependencies_ = 0;
+    std::fill(dependency_count_.begin(), dependency_count_.end(), 0);
+    for (auto& list : coarse) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+      for (const auto& d : list) ++dependency_count_[d.first];
+      live_dependencies_ += static_cast<int64_t>(list.size());
+    }
+    for (const auto& list : strong_deps_)
+      for (const auto& d : list)
+        if (generation_[d.first] == d.second) ++dependency_count_[d.first], ++live_dependencies_;
+    weak_deps_.swap(coarse);
+    compact_dependencies();
+  }
+  // Drops entries of candidates evaluated again since (their generation moved on).
+  void compact_dependencies() {
+    stored_dependencies_ = 0;
+    for (auto* lists : {&strong_deps_, &weak_deps_})
+      for (auto& list : *lists) {
+        size_t kept = 0;
+        for (const auto& d : list)
+          if (generation_[d.first] == d.second) list[kept++] = d;
+        list.resize(kept);
+        list.shrink_to_fit();
+        stored_dependencies_ += static_cast<int64_t>(kept);
+      }
+  }
   struct HeapEntry {
     double weight;
     int candidate;
@@ -302,7 +387,12 @@ class GreedyQuantizer {
   std::vector<int> changed_edges_;  // #edges: position in changes_ (valid if it points back)
   std::priority_queue<HeapEntry> heap_;
   std::vector<uint32_t> generation_;
-  std::vector<std::vector<Dependency>> depends_;
+  // Cached failures: (candidate, generation) per edge (strong) and per edge cluster (weak).
+  std::vector<std::vector<std::pair<int, uint32_t>>> strong_deps_, weak_deps_;
+  std::vector<int> cluster_of_;
+  int num_clusters_ = 0;
+  std::vector<int64_t> dependency_count_;
+  int64_t live_dependencies_ = 0, stored_dependencies_ = 0;
 };
 
 }  // namespace
@@ -310,6 +400,7 @@ class GreedyQuantizer {
 QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& options, Progress& progress) {
   if (!(options.scale > 0) || !std::isfinite(options.scale))
     throw Error(ErrorCode::InvalidArgument, "quantization: the scale must be a positive finite number");
+  if (options.cache_budget < 0) throw Error(ErrorCode::InvalidArgument, "quantization: negative cache budget");
   if (!(options.min_ideal_length > 0))
     throw Error(ErrorCode::InvalidArgument, "quantization: min_ideal_length must be positive");
   if (options.method != QuantizationMethod::Greedy)
