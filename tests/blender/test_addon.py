@@ -137,6 +137,67 @@ def test_cancel_leaves_scene_unchanged(binding):
     print("cancel: scene unchanged")
 
 
+def euler_characteristic(mesh):
+    return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
+
+
+def test_quad_remesh(binding):
+    """Suzanne (subdivided, triangulated by Blender) and an imported mesh with edges marked sharp:
+    a new all-quad object next to an untouched source."""
+    reset_scene()
+    bpy.ops.mesh.primitive_monkey_add()
+    monkey = bpy.context.active_object
+    monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
+    bpy.ops.object.modifier_apply(modifier="subsurf")
+    cases = [(monkey, 1200, False)]
+    fandisk = import_mesh(binding, "fandisk.obj")
+    # Mark the dihedral-sharp edges as a user would (Select Sharp Edges, Mark Sharp).
+    bpy.context.view_layer.objects.active = fandisk
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    bpy.ops.mesh.edges_select_sharp(sharpness=math.radians(40))
+    bpy.ops.mesh.mark_sharp()
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert sum(e.use_edge_sharp for e in fandisk.data.edges) > 500
+    cases.append((fandisk, 1500, True))
+    for source, target, sharp in cases:
+        for other in bpy.context.selected_objects:
+            other.select_set(False)
+        source.select_set(True)
+        bpy.context.view_layer.objects.active = source
+        before_source = [e for e in scene_state()[0] if e[0] == source.name]
+        names = {o.name for o in bpy.data.objects}
+        result = bpy.ops.object.qgp_quad_remesh(target_faces=target, use_marked_sharp=sharp)
+        assert result == {"FINISHED"}, result
+        created = [o for o in bpy.data.objects if o.name not in names]
+        assert len(created) == 1, created
+        quad = created[0]
+        assert [e for e in scene_state()[0] if e[0] == source.name][0][3:] == before_source[0][3:], "source changed"
+        sizes = {len(p.vertices) for p in quad.data.polygons}
+        assert sizes == {4}, f"not all quads: {sizes}"
+        n = len(quad.data.polygons)
+        assert 0.7 * target < n < 1.3 * target, (source.name, n, target)
+        assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
+            euler_characteristic(quad.data), euler_characteristic(source.data))
+        assert quad.matrix_world == source.matrix_world
+        print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept")
+
+
+def test_grid_uv(binding):
+    reset_scene()
+    obj = import_mesh(binding, "bunny.off")
+    result = bpy.ops.object.qgp_grid_uv(target_faces=800, mark_seams=True)
+    assert result == {"FINISHED"}, result
+    layer = obj.data.uv_layers.get("QGP Grid")
+    assert layer is not None, [l.name for l in obj.data.uv_layers]
+    uv = [tuple(d.uv) for d in layer.data]
+    assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
+    assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
+    seams = sum(e.use_seam for e in obj.data.edges)
+    assert seams > 0
+    print(f"grid UVs: {len(uv)} loops, {seams} seams marked")
+
+
 def test_batch():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     inputs = [os.path.join(MESHES, n) for n in ("truck.obj", "cycloidal.ply")]
@@ -152,6 +213,23 @@ def test_batch():
     print("batch: failures recorded, continued past them")
 
 
+def test_batch_success():
+    out = tempfile.mkdtemp(prefix="qgp_batch_")
+    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "spot.obj")]
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
+                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "400", "--uv"],
+                          capture_output=True, text=True)
+    report = json.load(open(os.path.join(out, "report.json")))
+    status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
+    assert status == {"torus.obj": "ok", "truck.obj": "error", "spot.obj": "ok"}, (status, proc.stderr[-2000:])
+    for name in ("torus", "spot"):
+        path = os.path.join(out, name + ".obj")
+        faces = [l for l in open(path) if l.startswith("f ")]
+        assert faces and all(len(l.split()) == 5 for l in faces), path
+        assert os.path.exists(os.path.join(out, name + "_uv.obj"))
+    print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
+
+
 def main():
     addon = install_addon()
     from importlib import import_module
@@ -160,7 +238,10 @@ def main():
     test_registration()
     test_broken_inputs(binding)
     test_cancel_leaves_scene_unchanged(binding)
+    test_quad_remesh(binding)
+    test_grid_uv(binding)
     test_batch()
+    test_batch_success()
     print("add-on test: OK")
 
 
