@@ -542,10 +542,9 @@ TEST(SeamlessMapMeshes, FeatureEdgesLieOnIsolines) {
     const SeamlessMap m = compute_seamless_map(p.mesh, p.field, p.cut, o, progress);
     print_stats(name + " (sharp 40)", m, t.seconds());
     const double diag = param_diagonal(m.param);
-    const IsolineSelection iso = select_isolines(p.mesh, p.field, p.cut);
-    EXPECT_TRUE(iso.dropped.empty());
+    // Edges whose isolines would collapse a triangle are left free (and counted).
     std::vector<char> dropped(p.mesh.num_edges(), 0);
-    for (int e : iso.dropped) dropped[e] = 1;
+    for (int e : m.stats.dropped_isoline_edges) dropped[e] = 1;
     int features = 0, off = 0;
     for (int e = 0; e < p.mesh.num_edges(); ++e) {
       if (!(p.field.feature_edge[e] || p.mesh.is_boundary_edge(e)) || dropped[e]) continue;
@@ -557,7 +556,10 @@ TEST(SeamlessMapMeshes, FeatureEdgesLieOnIsolines) {
         off += std::min(std::abs(d.x()), std::abs(d.y())) > 1e-9 * diag;
       }
     }
+    std::cout << "[seamless] " << name << ": " << features << " feature/boundary edges on isolines, "
+              << m.stats.dropped_isolines << " left free\n";
     EXPECT_GT(features, 100);
+    EXPECT_LE(m.stats.dropped_isolines * 100, features);  // at most 1%
     EXPECT_EQ(off, 0);
     EXPECT_EQ(m.stats.flipped_triangles, 0);
     EXPECT_EQ(m.stats.degenerate_triangles, 0);

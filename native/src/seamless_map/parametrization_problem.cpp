@@ -357,6 +357,14 @@ struct Evaluator {
 
 }  // namespace
 
+std::vector<int> ParametrizationProblem::forced_degenerate_faces(Progress& progress) {
+  const System& sys = system(ConstraintMode::Hard, 0, progress);
+  std::vector<int> faces;
+  for (int f = 0; f < mesh_.num_faces(); ++f)
+    if (sys.forced_degenerate[f]) faces.push_back(f);
+  return faces;
+}
+
 double ParametrizationProblem::field_energy(const Parametrization& param) const {
   double e = 0;
   for (int f = 0; f < mesh_.num_faces(); ++f) {
