@@ -66,7 +66,7 @@ TEST(LayoutMeshes, FieldSeamlessTMeshAndQuantizationInvariants) {
           ++round_runs;
           round_invalid += !error.empty();
           if (!error.empty()) EXPECT_NE(error.find("round"), std::string::npos) << name << ": " << error;
-          std::cout << "  round at " << target << ": " << (error.empty() ? "valid" : error.substr(0, 100)) << "\n";
+          std::cout << "  round at " << target << ": " << (error.empty() ? "valid" : error.substr(0, 100)) << std::endl;
           continue;
         }
         if (!error.empty()) {
@@ -105,7 +105,7 @@ TEST(LayoutMeshes, FieldSeamlessTMeshAndQuantizationInvariants) {
           std::cout << name << " | " << c << " | " << state.field->num_singularities << " | " << tm.nodes.size()
                     << " | " << tm.edges.size() << " | " << tm.cells.size() << " | " << tm.stats.trace_seconds
                     << " | " << target << " | " << q.stage1_steps << " | " << q.stage2_steps << " | " << q.objective
-                    << " | " << q.zero_edges << " | " << q.seconds << " |\n";
+                    << " | " << q.zero_edges << " | " << q.seconds << " |" << std::endl;
         }
       }
     }

@@ -255,7 +255,7 @@ TEST(SessionMeshes, EveryManifoldMeshBecomesAValidQuadMesh) {
       std::string message;
       const ErrorCode code = run_job(session, Job::Remesh, progress, &message);
       if (code != kCompleted) {
-        std::cout << name << " | " << target << " | FAILED: " << message << "\n";
+        std::cout << name << " | " << target << " | FAILED: " << message << std::endl;
         failed.push_back(name + "@" + std::to_string(static_cast<int>(target)));
         continue;
       }
@@ -266,7 +266,7 @@ TEST(SessionMeshes, EveryManifoldMeshBecomesAValidQuadMesh) {
       std::cout << name << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices << " | "
                 << m.quad.min_scaled_jacobian << " | " << m.quad.mean_angle_deviation << " | " << m.quad.hausdorff
                 << " | " << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh") << " | "
-                << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << "\n";
+                << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << std::endl;
     }
   }
   std::string list;
