@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The whole benchmark in one command (docs/benchmark.md):
+#   1. Quantized Retopo vs Blender's QuadriFlow in one Blender process (bench/compare_quadriflow.py)
+#   2. scaling of the native pipeline against input size and target density (bench/scaling.py)
+#   3. tables + plots (bench/plots.py) and side-by-side renders (bench/render.py)
+# Output: bench/results/ (compare.csv/.json/.md, scaling.csv/.md) and docs/images/ (plots, renders).
+#
+#   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render]
+#   MESHES=spot.obj,fandisk.obj TARGETS=2000 ./scripts/bench.sh      # a subset
+# Defaults are the full run: every manifold mesh of ../shared/meshes at 2000 and 8000 quads and inputs
+# of about 5 000 to 1 000 000 triangles. --quick: 3 small meshes, 2000 quads, inputs up to ~100k triangles.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+QUICK=0; DO_COMPARE=1; DO_SCALING=1; DO_RENDER=1
+for arg in "$@"; do
+  case "$arg" in
+    --quick) QUICK=1 ;;
+    --skip-compare) DO_COMPARE=0 ;;
+    --skip-scaling) DO_SCALING=0 ;;
+    --skip-render) DO_RENDER=0 ;;
+    *) echo "bench: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
+
+if [ "$QUICK" = 1 ]; then
+  MESHES=${MESHES:-spot.obj,fertility.off,fandisk.obj}
+  TARGETS=${TARGETS:-2000}
+  MAX_TRIANGLES=${MAX_TRIANGLES:-120000}
+  DENSITIES=${DENSITIES:-1000,2000,4000}
+  DENSITY_LEVEL=${DENSITY_LEVEL:-1}
+  CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:2000}
+else
+  MESHES=${MESHES:-}   # empty: all manifold meshes
+  TARGETS=${TARGETS:-2000,8000}
+  MAX_TRIANGLES=${MAX_TRIANGLES:-1200000}
+  DENSITIES=${DENSITIES:-500,1000,2000,4000,8000,16000,32000}
+  DENSITY_LEVEL=${DENSITY_LEVEL:-2}
+  CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:8000}
+fi
+MESH_DIR=${QGP_MESHES:-$(cd .. && pwd)/shared/meshes}
+RESULTS=bench/results
+IMAGES=docs/images
+PYTHON=/usr/bin/python3   # Debian's Python: numpy + matplotlib
+mkdir -p "$RESULTS" "$IMAGES"
+
+if [ ! -x build/bin/qgp ] || [ ! -f build/lib/libqgp.so ]; then
+  ./scripts/setup.sh
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build build -j"$(nproc)" --target qgp qgp_cli
+fi
+
+start=$(date +%s)
+if [ "$DO_COMPARE" = 1 ]; then
+  blender -b --factory-startup --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
+    --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes 2>&1 | grep -E '^(compare|Traceback|  File|[A-Za-z]*Error)'
+fi
+t_compare=$(date +%s)
+if [ "$DO_SCALING" = 1 ]; then
+  QGP_MESHES="$MESH_DIR" $PYTHON bench/scaling.py --max-triangles "$MAX_TRIANGLES" --densities "$DENSITIES" \
+    --density-level "$DENSITY_LEVEL" --out "$RESULTS"
+fi
+t_scaling=$(date +%s)
+$PYTHON bench/plots.py --results "$RESULTS" --images "$IMAGES"
+if [ "$DO_RENDER" = 1 ]; then
+  blender -b --factory-startup --python bench/render.py -- --mesh-dir "$MESH_DIR" --cases "$CASES" \
+    --results "$RESULTS" --out "$IMAGES" 2>&1 | grep -E '^(render|Traceback|  File|[A-Za-z]*Error)'
+fi
+end=$(date +%s)
+echo "bench: compare $((t_compare - start)) s, scaling $((t_scaling - t_compare)) s, plots+renders $((end - t_scaling)) s"
+echo "bench: tables $RESULTS/compare.md $RESULTS/scaling.md, images $IMAGES/"
