@@ -25,7 +25,7 @@ from compare_quadriflow import load_addon, read_input, new_object  # noqa: E402 
 
 # View direction (from the object towards the camera) and up axis per mesh; default: Z up, 3/4 front view.
 VIEWS = {
-    "spot.obj": ((0.8, 0.5, 1.0), (0, 1, 0)),
+    "spot.obj": ((0.7, 0.4, -1.0), (0, 1, 0)),
     "bunny.off": ((0.3, 0.2, 1.0), (0, 1, 0)),
     "armadillo.obj": ((0.2, 0.2, -1.0), (0, 1, 0)),
     "fertility.off": ((0.0, -1.0, 0.3), (0, 0, 1)),
@@ -44,7 +44,7 @@ def parse_args():
     ap.add_argument("--out", default=os.path.join(REPO, "docs", "images"))
     ap.add_argument("--mesh-dir", default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared",
                                                                                       "meshes")))
-    ap.add_argument("--width", type=int, default=1200)
+    ap.add_argument("--width", type=int, default=1000)
     return ap.parse_args(argv)
 
 
@@ -93,7 +93,8 @@ def add_panel(obj, wire):
     edges = edges.reshape(-1, 2)
     mean_edge = float(np.linalg.norm(co[edges[:, 0]] - co[edges[:, 1]], axis=1).mean()) if len(edges) else 0.0
     modifier = copy.modifiers.new("wire", "WIREFRAME")
-    modifier.thickness = 0.07 * mean_edge
+    diagonal = float(np.linalg.norm(co.max(0) - co.min(0))) if len(co) else 0.0
+    modifier.thickness = min(0.07 * mean_edge, 0.0015 * diagonal)
     modifier.use_replace = True
     modifier.use_even_offset = False
 
@@ -106,7 +107,7 @@ def add_text(body, location, rotation, size):
     obj = bpy.data.objects.new("label", curve)
     obj.location = location
     obj.rotation_euler = rotation
-    obj.data.materials.append(material("text", (0.1, 0.1, 0.1, 1.0)))
+    obj.data.materials.append(material("text", (0.0, 0.0, 0.0, 1.0)))
     bpy.context.scene.collection.objects.link(obj)
     return obj
 
@@ -115,8 +116,15 @@ def caption(row, label):
     if row is None:
         return f"{label}: not run"
     if row["status"] != "ok":
-        message = row["message"] if len(row["message"]) < 60 else row["message"][:57] + "..."
-        return f"{label}: {row['status']}\n{message}"
+        words, lines = row["message"].split(), [""]
+        for word in words:  # wrap at ~56 characters, at most 3 lines
+            if len(lines[-1]) + len(word) > 56:
+                lines.append("")
+            lines[-1] += (" " if lines[-1] else "") + word
+        if len(lines) > 3:
+            lines = lines[:3]
+            lines[2] += " ..."
+        return f"{label}: {row['status']}\n" + "\n".join(lines)
     hd = float(row["hausdorff"]) * 100 if row["hausdorff"] else float("nan")
     return (f"{label}: {int(float(row['quads'])):,} quads, {row['irregular_vertices']} irregular\n"
             f"{float(row['seconds']):.1f} s, Hausdorff {hd:.2f}% diag")
@@ -180,16 +188,18 @@ def render_case(binding, args, name, target, rows):
     scene.display.shading.light = "STUDIO"
     scene.display.shading.color_type = "MATERIAL"
     scene.display.shading.show_cavity = False
+    scene.display.shading.show_specular_highlight = False
     scene.display.render_aa = "8"
     scene.render.resolution_x = args.width
     scene.render.resolution_y = int(args.width * (height + 0.25 * spacing) / (3.05 * spacing))
     scene.render.resolution_percentage = 100
     scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.color_mode = "BW"  # grey levels only: small PNGs
     scene.render.image_settings.color_depth = "8"
     scene.render.image_settings.compression = 100
     scene.view_settings.view_transform = "Standard"
     scene.world = scene.world or bpy.data.worlds.new("world")
+    scene.world.color = (1.0, 1.0, 1.0)
     scene.render.film_transparent = False
     path = os.path.join(args.out, f"compare_{stem}_{target}.png")
     scene.render.filepath = path
