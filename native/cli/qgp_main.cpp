@@ -232,8 +232,8 @@ bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session) 
 }
 
 void print_remesh_summary(const qgp::Json& report) {
-  if (!report.contains("quads")) return;
-  const qgp::Json& q = report["quads"];
+  if (!report.contains("quad")) return;
+  const qgp::Json& q = report["quad"];
   std::cout << "quads " << q.value("faces", 0) << ", vertices " << q.value("vertices", 0) << ", irregular vertices "
             << q.value("irregular_vertices", 0) << ", min scaled Jacobian " << q.value("min_scaled_jacobian", 0.0)
             << ", " << report["timings_s"].value("total", 0.0) << " s\n";

@@ -48,14 +48,25 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << name;
   EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << name;
   EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << name;
+  EXPECT_EQ(m.quad.flipped_quads, 0) << name;
+  // Irregular vertices only where the map is singular.
+  const QuadTopology topology = quad_topology(*quads);
+  int irregular_off_singularity = 0;
+  for (int v = 0; v < quads->num_vertices(); ++v) {
+    const bool irregular = topology.on_boundary[v] ? topology.valence[v] != 3 : topology.valence[v] != 4;
+    irregular_off_singularity += irregular && !quads->vertex_singular[v];
+  }
+  EXPECT_EQ(irregular_off_singularity, 0) << name;
+  EXPECT_EQ(report["quad"]["faces"], quads->num_quads()) << name;
   // Same topology as the input: Euler characteristic and number of boundary loops' presence.
   EXPECT_EQ(m.euler_characteristic, m.reference_euler_characteristic) << name;
   const TriMesh& input = session.intake()->mesh;
   bool input_has_boundary = false;
   for (int e = 0; e < input.num_edges(); ++e) input_has_boundary = input_has_boundary || input.is_boundary_edge(e);
   EXPECT_EQ(m.quad.topology.boundary_edges > 0, input_has_boundary) << name;
-  // On the surface: within 2% of the bounding-box diagonal both ways (metrics are relative to it).
-  EXPECT_LT(m.quad.hausdorff, 0.02) << name;
+  // On the surface: within 5% of the bounding-box diagonal both ways even when coarse (metrics are
+  // relative to it; the sweep asks 1% at 8000 quads).
+  EXPECT_LT(m.quad.hausdorff, 0.05) << name;
   if (sharp_angle > 0) EXPECT_GT(m.sharp_edge_coverage, 0.95) << name;
   // Integer-grid UVs for every input triangle intake kept.
   const std::vector<double>& uv = session.corner_uv();
@@ -95,7 +106,7 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   EXPECT_NEAR(m.quads, 1500, 0.25 * 1500);
   EXPECT_GT(m.quad.min_scaled_jacobian, 0);
   const Json& report = session.report();
-  for (const char* key : {"input", "field", "seamless", "tmesh", "quantization", "extraction", "quads"})
+  for (const char* key : {"input", "field", "seamless", "tmesh", "quantization", "igm", "extraction", "quad"})
     EXPECT_TRUE(report.contains(key)) << key;
   for (const char* stage : {"cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction"}) {
     EXPECT_TRUE(report["timings_s"].contains(stage)) << stage;
@@ -228,32 +239,58 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
   std::cout << "round quantizer: " << completed << " completed, " << refused << " refused\n";
 }
 
-// Every manifold mesh of the shared set at two densities (the set's slow sweep).
+// Every manifold mesh of the shared set at three densities (the slow sweep): one session per mesh,
+// so the seamless map and T-mesh are computed once and re-quantized.
 TEST(SessionMeshes, EveryManifoldMeshBecomesAValidQuadMesh) {
-  std::cout << "mesh | target | quads | irregular | min scaled Jacobian | Hausdorff/diag | seconds\n";
-  int failures = 0;
+  std::cout << "mesh | target | quads | irregular | min scaled Jacobian | mean angle dev | Hausdorff | "
+               "field+cut+seamless+tmesh s | quantization s | igm s | extraction s\n";
+  std::vector<std::string> failed;
   for (const std::string& name : test::manifold_mesh_files()) {
-    for (double target : {500.0, 3000.0}) {
-      Session session(read_mesh_file(test::mesh_path(name)));
+    Session session(read_mesh_file(test::mesh_path(name)));
+    for (double target : {500.0, 2000.0, 8000.0}) {
       RemeshOptions options;
       options.target_faces = target;
       session.set_options(options);
       Progress progress;
       std::string message;
-      Timer timer;
       const ErrorCode code = run_job(session, Job::Remesh, progress, &message);
       if (code != kCompleted) {
         std::cout << name << " | " << target << " | FAILED: " << message << "\n";
-        ++failures;
+        failed.push_back(name + "@" + std::to_string(static_cast<int>(target)));
         continue;
       }
       const PolygonMeshMetrics m = expect_valid_output(name, session, -1);
+      if (target == 8000) EXPECT_LE(m.quad.hausdorff, 0.01) << name;
+      const Json& t = session.report()["timings_s"];
+      auto sec = [&](const char* k) { return t.value(k, 0.0); };
       std::cout << name << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices << " | "
-                << m.quad.min_scaled_jacobian << " | "
-                << m.quad.hausdorff << " | " << timer.seconds() << "\n";
+                << m.quad.min_scaled_jacobian << " | " << m.quad.mean_angle_deviation << " | " << m.quad.hausdorff
+                << " | " << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh") << " | "
+                << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << "\n";
     }
   }
-  EXPECT_EQ(failures, 0);
+  std::string list;
+  for (const std::string& f : failed) list += f + " ";
+  EXPECT_TRUE(failed.empty()) << "failed: " << list;
+}
+
+// CAD meshes with sharp edges at 40 degrees, and meshes with boundaries: feature curves and
+// boundaries become quad edges.
+TEST(SessionMeshes, SharpEdgesAndBoundariesAreQuadEdges) {
+  for (const char* name : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj", "camelhead.off", "face.obj"}) {
+    const bool cad = std::string(name).find(".obj") != std::string::npos && std::string(name) != "face.obj";
+    Session session(read_mesh_file(test::mesh_path(name)));
+    RemeshOptions options;
+    options.target_faces = 2000;
+    options.sharp_angle_deg = cad ? 40 : -1;
+    session.set_options(options);
+    Progress progress;
+    std::string message;
+    ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << name << ": " << message;
+    const PolygonMeshMetrics m = expect_valid_output(name, session, cad ? 40 : -1);
+    std::cout << name << ": " << m.quads << " quads, sharp-edge coverage " << m.sharp_edge_coverage
+              << ", boundary edges " << m.quad.topology.boundary_edges << "\n";
+  }
 }
 
 }  // namespace

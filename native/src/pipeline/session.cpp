@@ -448,7 +448,7 @@ void Session::collect_results(Job job, Progress& progress) {
   QuadMetricsOptions metric_options;
   metric_options.hausdorff_samples = 20000;
   const QuadMetrics metrics = compute_quad_metrics(*quads_, intake_mesh, metric_options, progress);
-  report_["quads"] = quad_report_json(metrics);
+  report_["quad"] = quad_report_json(metrics);
   report_["timings_s"]["metrics"] = timer.seconds();
 }
 
