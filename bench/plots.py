@@ -171,6 +171,9 @@ def scaling_plots(rows, images):
             x = [p[0] for p in pts]
             ax_t.plot(x, [p[1] for p in pts], marker="o", label=f"{shape} total (wall)")
             ax_m.plot(x, [p[2] for p in pts], marker="o", label=shape)
+        failed = [(int(r[xkey]), number(r["wall_s"])) for r in rs if r["status"] != "ok"]
+        if failed:
+            ax_t.scatter(*zip(*failed), marker="x", color="black", zorder=3, label="run refused / timed out")
         # Per-stage times of the first shape, to show where the time goes.
         shape = sorted({r["shape"] for r in rs})[0]
         pts = sorted((int(r[xkey]), r) for r in rs if r["shape"] == shape)

@@ -145,7 +145,8 @@ def row_for(series, shape, level, triangles, target, result):
     row = {"series": series, "shape": shape, "level": level, "triangles": triangles, "target": target,
            "status": status, "message": message, "wall_s": round(wall, 3), "peak_rss_mb": round(peak_mb, 1),
            "total_s": timings.get("total")}
-    row["quads"] = (report.get("quads") or {}).get("faces")
+    quad = report.get("quad") or report.get("quads") or {}  # the report object was renamed "quad"
+    row["quads"] = quad.get("faces")
     for stage in STAGES:
         row[stage + "_s"] = timings.get(stage)
     return row

@@ -52,8 +52,12 @@ fi
 
 start=$(date +%s)
 if [ "$DO_COMPARE" = 1 ]; then
-  blender -b --factory-startup --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
-    --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes 2>&1 | grep -E '^(compare|Traceback|  File|[A-Za-z]*Error)'
+  # Full Blender output in compare.log; progress lines on the terminal.
+  blender -b --factory-startup --python-exit-code 1 --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
+    --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes >"$RESULTS/compare.log" 2>&1 &
+  blender_pid=$!
+  tail -n +1 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
+  wait $blender_pid
 fi
 t_compare=$(date +%s)
 if [ "$DO_SCALING" = 1 ]; then
@@ -63,8 +67,9 @@ fi
 t_scaling=$(date +%s)
 $PYTHON bench/plots.py --results "$RESULTS" --images "$IMAGES"
 if [ "$DO_RENDER" = 1 ]; then
-  blender -b --factory-startup --python bench/render.py -- --mesh-dir "$MESH_DIR" --cases "$CASES" \
-    --results "$RESULTS" --out "$IMAGES" 2>&1 | grep -E '^(render|Traceback|  File|[A-Za-z]*Error)'
+  blender -b --factory-startup --python-exit-code 1 --python bench/render.py -- --mesh-dir "$MESH_DIR" --cases "$CASES" \
+    --results "$RESULTS" --out "$IMAGES" >"$RESULTS/render.log" 2>&1 || { tail -20 "$RESULTS/render.log"; exit 1; }
+  grep -E '^render' "$RESULTS/render.log" || true
 fi
 end=$(date +%s)
 echo "bench: compare $((t_compare - start)) s, scaling $((t_scaling - t_compare)) s, plots+renders $((end - t_scaling)) s"
