@@ -9,19 +9,21 @@ against input size and against target density.
 Inputs: each shape of ../shared/meshes is refined by midpoint subdivision (every triangle -> 4, the
 surface is unchanged) until the next level would exceed --max-triangles; levels are written as OBJ
 under OUT/scaling_inputs/ (regenerated only when missing). Every run is one `qgp remesh` process;
-its wall time and peak resident memory (ru_maxrss of that child, from wait4) are recorded with the
+its wall time and peak resident memory (GNU time's %M, else ru_maxrss from wait4) are recorded with the
 per-stage timings of its JSON report. Writes OUT/scaling.csv (one row per run).
 """
 import argparse
 import csv
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
 
 import numpy as np
 
+GNU_TIME = "/usr/bin/time"
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 STAGES = ["intake", "cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction",
@@ -106,15 +108,22 @@ def run_qgp(qgp, path, target, out_dir, timeout):
         os.remove(report_path)
     cmd = [qgp, "remesh", path, "-o", os.path.join(out_dir, stem + ".obj"), "--faces", str(target),
            "--report", report_path]
+    # Peak memory from GNU time when present: a child forked from this Python would inherit Python's
+    # high-water mark in ru_maxrss (Linux keeps it across exec), GNU time's own is tiny.
+    rss_path = os.path.join(out_dir, stem + ".maxrss")
+    if os.path.exists(rss_path):
+        os.remove(rss_path)
+    if os.access(GNU_TIME, os.X_OK):
+        cmd = [GNU_TIME, "-f", "%M", "-o", rss_path] + cmd
     start = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
     status, message = None, ""
     while True:
         pid, exit_status, usage = os.wait4(proc.pid, os.WNOHANG)
         if pid:
             break
         if time.perf_counter() - start > timeout:
-            proc.kill()
+            os.killpg(proc.pid, signal.SIGKILL)
             pid, exit_status, usage = os.wait4(proc.pid, 0)
             status, message = "timeout", f"killed after {timeout:.0f} s"
             break
@@ -123,6 +132,11 @@ def run_qgp(qgp, path, target, out_dir, timeout):
     proc.returncode = os.waitstatus_to_exitcode(exit_status)
     stderr = proc.stderr.read().decode(errors="replace").strip()
     peak_mb = usage.ru_maxrss / 1024.0  # Linux: kilobytes
+    if os.path.exists(rss_path):
+        with open(rss_path) as f:
+            lines = [line for line in f.read().split() if line.isdigit()]
+        if lines:
+            peak_mb = int(lines[-1]) / 1024.0
     report = {}
     if os.path.exists(report_path):
         with open(report_path) as f:
