@@ -149,6 +149,7 @@ def render_case(binding, args, name, target, rows):
     true_up = back.cross(right)
     to_camera_frame = Matrix((right, true_up, back))  # rows: world -> camera axes
     local = (vertices - center) @ np.asarray(to_camera_frame).T
+    middle = 0.5 * (local.min(0) + local.max(0))  # centre of the projected outline, camera frame
     width = float(np.ptp(local[:, 0]))
     height = float(np.ptp(local[:, 1]))
     spacing = 1.12 * max(width, 0.6 * height)
@@ -157,7 +158,7 @@ def render_case(binding, args, name, target, rows):
         panels.append((tool, caption(rows.get((name, target, tool)), label), rows.get((name, target, tool))))
     camera_rotation = to_camera_frame.transposed().to_euler()
     for i, (tool, text, row) in enumerate(panels):
-        offset = Vector(((i - 1) * spacing, 0, 0))  # camera-frame offset of this panel
+        offset = Vector(((i - 1) * spacing - middle[0], -middle[1], 0))  # camera-frame offset of this panel
         world_offset = to_camera_frame.transposed() @ offset
         if tool == "input":
             obj = new_object(stem + "_input", vertices - center, polygons)
