@@ -13,7 +13,8 @@ from the CSV by bench/plots.py (system Python with matplotlib).
 
 Status per run: ok (a mesh came back), refused (the tool reported an error; message kept),
 unchanged (the tool returned without error but left the mesh as it was: QuadriFlow does this when
-its solver fails), timeout (Quantized Retopo did not finish within --timeout s and was cancelled).
+its solver fails), timeout (Quantized Retopo did not finish within --timeout s and was cancelled),
+crashed (Blender died during the run; recorded by the next --resume run, which scripts/bench.sh starts).
 """
 import argparse
 import csv
@@ -63,6 +64,9 @@ def parse_args():
     ap.add_argument("--quantizer", default="", help="Quantized Retopo quantizer (greedy / round); default: the "
                                                     "library's default")
     ap.add_argument("--save-meshes", action="store_true", help="write every result as OBJ under OUT/meshes/")
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the rows of OUT/compare.csv and run only the missing cases; a case that was "
+                         "running when Blender crashed is recorded as 'crashed'")
     return ap.parse_args(argv)
 
 
@@ -244,25 +248,52 @@ def main():
     os.makedirs(os.path.join(args.out, "meshes") if args.save_meshes else args.out, exist_ok=True)
     addon = load_addon()
     binding = sys.modules[addon.__name__ + ".core.binding"]
-    rows = []
     csv_path = os.path.join(args.out, "compare.csv")
-    with open(csv_path, "w", newline="") as f:
+    pending_path = os.path.join(args.out, "compare.pending")  # the case running now; left behind by a crash
+    rows = []
+    if not args.resume and os.path.exists(pending_path):
+        os.remove(pending_path)
+    if args.resume and os.path.exists(csv_path):
+        with open(csv_path) as f:
+            rows = list(csv.DictReader(f))
+    done = {(r["mesh"], str(r["target"]), r["tool"]) for r in rows}
+    with open(csv_path, "a" if rows else "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
-        writer.writeheader()
+        if not rows:
+            writer.writeheader()
+
+        def emit(row):
+            writer.writerow(row)
+            f.flush()
+            rows.append(row)
+            print(f"compare: {row['mesh']} {row['target']} {row['tool']}: {row['status']} {row.get('quads', '')} "
+                  f"quads {row['seconds']} s {row['message'][:120]}", flush=True)
+
+        if args.resume and os.path.exists(pending_path):
+            with open(pending_path) as p:
+                crashed = json.load(p)
+            if (crashed["mesh"], str(crashed["target"]), crashed["tool"]) not in done:
+                crashed.update(status="crashed", seconds="",
+                               message="Blender exited during this run (crash, or a script error: see compare.log)")
+                emit(crashed)
+                done.add((crashed["mesh"], str(crashed["target"]), crashed["tool"]))
         case = 0
         for name in names:
-            path = os.path.join(args.mesh_dir, name)
-            data = read_input(binding, path)
+            data = None
             for target in targets:
                 order = tools if case % 2 == 0 else list(reversed(tools))  # alternate who goes first
                 case += 1
                 for tool in order:
-                    row = run_case(addon, binding, args, name, MANIFOLD_MESHES.get(name, "other"), data, target, tool)
-                    writer.writerow(row)
-                    f.flush()
-                    rows.append(row)
-                    print(f"compare: {name} {target} {tool}: {row['status']} {row.get('quads', '')} quads "
-                          f"{row['seconds']} s {row['message'][:120]}", flush=True)
+                    if (name, str(target), tool) in done:
+                        continue
+                    if data is None:
+                        data = read_input(binding, os.path.join(args.mesh_dir, name))
+                    category = MANIFOLD_MESHES.get(name, "other")
+                    with open(pending_path, "w") as p:
+                        json.dump({"mesh": name, "category": category, "input_triangles": len(data[2]),
+                                   "target": target, "tool": tool}, p)
+                    emit(run_case(addon, binding, args, name, category, data, target, tool))
+                    os.remove(pending_path)
     with open(os.path.join(args.out, "compare.json"), "w") as f:
         json.dump({"blender": bpy.app.version_string, "qgp": binding.version(), "sharp_angle": args.sharp_angle,
                    "quantizer": args.quantizer or "default",

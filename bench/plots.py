@@ -75,9 +75,9 @@ def median(values):
 
 
 def compare_summary(rows):
-    lines = ["| tool | runs | ok | refused | unchanged | timeout | χ kept (of ok) | flipped quads total "
+    lines = ["| tool | runs | ok | refused | unchanged | timeout | crashed | χ kept (of ok) | flipped quads total "
              "| median time s | median Hausdorff % | median p95 angle ° | median min SJ |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     by_tool = defaultdict(list)
     for r in rows:
         by_tool[r["tool"]].append(r)
@@ -87,7 +87,7 @@ def compare_summary(rows):
         hd = median([number(r["hausdorff"]) for r in ok])
         lines.append(
             f"| {TOOL_LABEL.get(tool, tool)} | {len(rs)} | {len(ok)} | {count('refused')} | {count('unchanged')} "
-            f"| {count('timeout')} | {sum(r['euler_characteristic_preserved'] == 'True' for r in ok)} "
+            f"| {count('timeout')} | {count('crashed')} | {sum(r['euler_characteristic_preserved'] == 'True' for r in ok)} "
             f"| {sum(int(number(r['flipped_quads']) or 0) for r in ok)} "
             f"| {fmt(median([number(r['seconds']) for r in rs]), '.2f')} "
             f"| {'—' if hd is None else format(100 * hd, '.2f')} "
@@ -102,7 +102,7 @@ def compare_plots(rows, images):
     for tool in TOOL_LABEL:
         for target, fill in zip(sorted({int(r["target"]) for r in rows}), ["full", "none"]):
             pts = [(int(r["input_triangles"]), float(r["seconds"])) for r in rows
-                   if r["tool"] == tool and int(r["target"]) == target]
+                   if r["tool"] == tool and int(r["target"]) == target and number(r["seconds"]) is not None]
             if pts:
                 x, y = zip(*pts)
                 ax.scatter(x, y, label=f"{TOOL_LABEL[tool]} ({target} quads)", facecolors=None if fill == "full"

@@ -52,12 +52,19 @@ fi
 
 start=$(date +%s)
 if [ "$DO_COMPARE" = 1 ]; then
-  # Full Blender output in compare.log; progress lines on the terminal.
-  blender -b --factory-startup --python-exit-code 1 --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
-    --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes >"$RESULTS/compare.log" 2>&1 &
-  blender_pid=$!
-  tail -n +1 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
-  wait $blender_pid
+  # Full Blender output in compare.log; progress lines on the terminal. If Blender dies (a crash in
+  # either tool), the run resumes after the case that was running, which is recorded as 'crashed'.
+  : >"$RESULTS/compare.log"
+  resume=""
+  for attempt in 1 2 3 4 5 6; do
+    blender -b --factory-startup --python-exit-code 1 --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
+      --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
+    blender_pid=$!
+    tail -n 0 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
+    if wait $blender_pid; then break; fi
+    echo "bench: Blender exited with an error (attempt $attempt); resuming after the failed case"
+    resume="--resume"
+  done
 fi
 t_compare=$(date +%s)
 if [ "$DO_SCALING" = 1 ]; then
