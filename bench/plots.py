@@ -135,9 +135,9 @@ def compare_plots(rows, images):
         ax.set_xticklabels([os.path.splitext(m)[0][:12] for m in meshes], rotation=70, fontsize=7)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     if handles:
-        fig.legend(handles, labels, loc="upper center", ncol=4, fontsize=8)
+        fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.955), ncol=4, fontsize=8)
     fig.suptitle("Quality of successful runs (same native measurement for both tools)", y=0.995, fontsize=10)
-    paths.append(save(fig, images, "bench_compare_quality.png"))
+    paths.append(save(fig, images, "bench_compare_quality.png", rect=(0, 0, 1, 0.91)))
     return paths
 
 
@@ -192,8 +192,8 @@ def scaling_plots(rows, images):
     return paths
 
 
-def save(fig, images, name):
-    fig.tight_layout()
+def save(fig, images, name, rect=None):
+    fig.tight_layout(rect=rect)
     path = os.path.join(images, name)
     fig.savefig(path, dpi=90)
     plt.close(fig)
