@@ -174,16 +174,48 @@ def run_quadriflow(source, target):
     Returns (status, message, result object or None)."""
     before = mesh_polygons(source.data)
     activate(source)
-    try:
-        bpy.ops.object.quadriflow_remesh(mode="FACES", target_faces=target, use_preserve_sharp=True,
-                                         use_preserve_boundary=True, use_mesh_symmetry=False,
-                                         preserve_paint_mask=False, smooth_normals=False, seed=0)
-    except RuntimeError as e:
-        return "refused", str(e).replace("Error: ", "").strip(), None
+    with CapturedStdout() as captured:
+        try:
+            bpy.ops.object.quadriflow_remesh(mode="FACES", target_faces=target, use_preserve_sharp=True,
+                                             use_preserve_boundary=True, use_mesh_symmetry=False,
+                                             preserve_paint_mask=False, smooth_normals=False, seed=0)
+            error = None
+        except RuntimeError as e:
+            error = str(e).replace("Error: ", "").strip()
+    if error is not None:
+        return "refused", error, None
     after = mesh_polygons(source.data)
     if all(a.shape == b.shape and np.array_equal(a, b) for a, b in zip(before, after)):
-        return "unchanged", "finished without error but left the mesh unchanged", None
+        # QuadriFlow reports why only as a warning on the console (not to the caller): keep that text.
+        warnings = [line.split(":", 1)[1].strip() for line in captured.text.splitlines()
+                    if line.startswith(("Warning:", "Error:"))]
+        return "unchanged", "; ".join(warnings) or "finished without error but left the mesh unchanged", None
     return "ok", "", source
+
+
+class CapturedStdout:
+    """Captures what native code writes to file descriptor 1 (Blender prints operator reports there in
+    background mode); the text is echoed back afterwards, so the log still shows it."""
+
+    def __enter__(self):
+        import tempfile
+        sys.stdout.flush()
+        self._file = tempfile.TemporaryFile(mode="w+b")
+        self._saved = os.dup(1)
+        os.dup2(self._file.fileno(), 1)
+        self.text = ""
+        return self
+
+    def __exit__(self, *exc):
+        sys.stdout.flush()
+        os.dup2(self._saved, 1)
+        os.close(self._saved)
+        self._file.seek(0)
+        self.text = self._file.read().decode(errors="replace")
+        self._file.close()
+        sys.stdout.write(self.text)
+        sys.stdout.flush()
+        return False
 
 
 def measure(binding, result, ref_vertices, ref_triangles, sharp_angle):
