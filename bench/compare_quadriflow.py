@@ -129,6 +129,9 @@ def mesh_polygons(mesh):
     return v.reshape(-1, 3), sizes, corners
 
 
+_stuck_sessions = []  # sessions whose job ignored a cancel (never freed; see run_qgp)
+
+
 def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
     """Quantized Retopo the way the operator runs it (same mesh glue), with a cancel after `timeout` s.
     Returns (status, message, result object or None, stage seconds dict)."""
@@ -146,9 +149,16 @@ def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
         if state == binding.STATE_RUNNING:
             session.cancel()
             try:
-                session.wait()
+                state = session.wait(30.0)
             except binding.QGPError:
-                pass
+                state = binding.STATE_CANCELLED
+            if state == binding.STATE_RUNNING:
+                # The job ignores the cancel: freeing the session would block on its worker, so it is
+                # kept alive (leaked) and the benchmark goes on.
+                _stuck_sessions.append(session)
+                session = None
+                return "timeout", f"cancelled after {timeout:.0f} s; the cancel was not honoured within 30 s", \
+                    None, {}
             return "timeout", f"cancelled after {timeout:.0f} s", None, stage_seconds(session)
         vertices, quads, quad_triangle = session.quad_mesh()
         result = blender_mesh.create_quad_object(bpy.context, source, vertices, quads, quad_triangle, src)

@@ -7,6 +7,7 @@
 #
 #   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render]
 #   MESHES=spot.obj,fandisk.obj TARGETS=2000 ./scripts/bench.sh      # a subset
+#   (also MAX_TRIANGLES, DENSITIES, DENSITY_LEVEL, CASES, QGP_TIMEOUT, SCALING_TIMEOUT, QGP_MESHES)
 # Defaults are the full run: every manifold mesh of ../shared/meshes at 2000 and 8000 quads and inputs
 # of about 5 000 to 1 000 000 triangles. --quick: 3 small meshes, 2000 quads, inputs up to ~100k triangles.
 set -euo pipefail
@@ -39,6 +40,8 @@ else
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:8000}
 fi
 MESH_DIR=${QGP_MESHES:-$(cd .. && pwd)/shared/meshes}
+QGP_TIMEOUT=${QGP_TIMEOUT:-900}          # s before a Quantized Retopo run in Blender is cancelled
+SCALING_TIMEOUT=${SCALING_TIMEOUT:-1800}  # s before a scaling run (qgp process) is killed
 RESULTS=bench/results
 IMAGES=docs/images
 PYTHON=/usr/bin/python3   # Debian's Python: numpy + matplotlib
@@ -58,7 +61,7 @@ if [ "$DO_COMPARE" = 1 ]; then
   resume=""
   for attempt in 1 2 3 4 5 6; do
     blender -b --factory-startup --python-exit-code 1 --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
-      --meshes "$MESHES" --targets "$TARGETS" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
+      --meshes "$MESHES" --targets "$TARGETS" --timeout "$QGP_TIMEOUT" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
     blender_pid=$!
     tail -n 0 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
     if wait $blender_pid; then break; fi
@@ -69,7 +72,7 @@ fi
 t_compare=$(date +%s)
 if [ "$DO_SCALING" = 1 ]; then
   QGP_MESHES="$MESH_DIR" $PYTHON bench/scaling.py --max-triangles "$MAX_TRIANGLES" --densities "$DENSITIES" \
-    --density-level "$DENSITY_LEVEL" --out "$RESULTS"
+    --density-level "$DENSITY_LEVEL" --timeout "$SCALING_TIMEOUT" --out "$RESULTS"
 fi
 t_scaling=$(date +%s)
 $PYTHON bench/plots.py --results "$RESULTS" --images "$IMAGES"
