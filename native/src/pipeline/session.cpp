@@ -347,6 +347,11 @@ void Session::run_quantization_stage(Progress& progress) {
             throw Error(ErrorCode::StageFailed, "quantization (round): " + rounded.quantization.invalid_reason);
           state.quantization = std::move(rounded.quantization);
           state.igm = std::move(rounded.map.param);
+          state.igm_stats = IgmStats{};
+          state.igm_stats.path = "round";
+          state.igm_stats.flipped_triangles = rounded.map.flipped_triangles;
+          state.igm_stats.degenerate_triangles = rounded.map.degenerate_triangles;
+          state.igm_stats.unresolved_equations = rounded.map.unresolved_equations;
         }
       } catch (const Error& e) {
         rethrow_for_component(e, c, components_.size());
@@ -366,14 +371,39 @@ void Session::run_quantization_stage(Progress& progress) {
 void Session::run_igm_stage(Progress& progress) {
   Timer timer;
   progress.begin_stage("igm");
+  Json per_component = Json::array();
+  int flipped = 0, degenerate = 0, fallbacks = 0;
+  double residual = 0;
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
     set_component_range(c, progress);
-    if (state.igm) continue;
-    throw Error(ErrorCode::NotBuilt,
-                "stage 'igm' is not built yet for the greedy quantizer (the round quantizer works); no output was written");
+    if (!state.igm) {
+      state.quads.reset();
+      IgmOptions options;
+      options.edge_length = state.seamless_edge_length;
+      try {
+        IntegerGridMap map = compute_integer_grid_map(state.mesh, *state.field, *state.cut, *state.seamless,
+                                                      *state.exact_seamless, *state.tmesh, *state.quantization,
+                                                      options, progress);
+        state.igm_stats = map.stats;
+        state.igm = std::move(map.param);
+      } catch (const Error& e) {
+        rethrow_for_component(e, c, components_.size());
+      }
+    }
+    const IgmStats& s = state.igm_stats;
+    flipped += s.flipped_triangles;
+    degenerate += s.degenerate_triangles;
+    fallbacks += s.fallback_used;
+    residual = std::max(residual, s.max_integer_residual);
+    per_component.push_back(igm_report(s));
   }
   report_["timings_s"]["igm"] = timer.seconds();
+  report_["igm"] = {{"flipped_triangles", flipped},
+                    {"degenerate_triangles", degenerate},
+                    {"max_integer_residual", residual},
+                    {"fallback_used", fallbacks > 0},
+                    {"components", std::move(per_component)}};
 }
 
 void Session::run_quad_stage(Progress& progress) {

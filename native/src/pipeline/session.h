@@ -10,6 +10,7 @@
 #include "core/quad_mesh.h"
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
+#include "igm/integer_grid_map.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
@@ -42,6 +43,7 @@ struct ComponentState {
   Quantizer quantizer = Quantizer::Greedy;
   // Stage 4: the integer-grid map (1 unit = 1 quad) and stage 5: its quads.
   std::optional<ExactParametrization> igm;
+  IgmStats igm_stats;                   // of the greedy path (path "round" for the baseline)
   std::optional<QuadExtraction> quads;
 };
 

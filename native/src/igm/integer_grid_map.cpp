@@ -1,0 +1,540 @@
+#include "igm/integer_grid_map.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/error.h"
+#include "core/sanitize_isolines.h"
+#include "core/timer.h"
+#include "quantization/round_quantization.h"
+#include "seamless_map/parametrization_problem.h"
+
+namespace qgp {
+namespace {
+
+// A point of the plane as a linear expression over corner coordinates plus a constant.
+struct PointExpr {
+  std::array<std::vector<CornerTerm>, 2> terms;  // u, v
+  std::array<double, 2> constant{0, 0};
+};
+
+PointExpr surface_point_expr(const SurfacePoint& p) {
+  PointExpr e;
+  for (int k = 0; k < 3; ++k) {
+    const double b = p.barycentric[k];
+    if (b == 0) continue;
+    for (int a = 0; a < 2; ++a) e.terms[a].push_back({3 * p.face + k, a, b});
+  }
+  return e;
+}
+
+// Rotation by r quarter turns: (u,v) -> (-v,u) per turn.
+void rotate(PointExpr& e, int r) {
+  for (int i = 0; i < ((r % 4) + 4) % 4; ++i) {
+    std::swap(e.terms[0], e.terms[1]);
+    std::swap(e.constant[0], e.constant[1]);
+    for (CornerTerm& t : e.terms[0]) t.coeff = -t.coeff;
+    e.constant[0] = -e.constant[0];
+  }
+}
+
+// Maps a point expression of face(h)'s chart to the opposite face's chart with the new map's
+// transition: p_g = R^r p_f + t_h, t_h = c_g(w) - R^r c_f(w) for the shared vertex w = from(h).
+void transfer(const TriMesh& mesh, const std::vector<int8_t>& rotation, int h, PointExpr& e) {
+  const int o = mesh.opposite[h];
+  const int r = rotation[h];
+  rotate(e, r);
+  PointExpr cf;
+  for (int a = 0; a < 2; ++a) cf.terms[a].push_back({h, a, 1.0});  // corner h is from(h) in face(h)
+  rotate(cf, r);
+  const int cg = 3 * (o / 3) + (o % 3 + 1) % 3;  // corner of to(o) = from(h) in face(o)
+  for (int a = 0; a < 2; ++a) {
+    e.terms[a].push_back({cg, a, 1.0});
+    for (CornerTerm t : cf.terms[a]) {
+      t.coeff = -t.coeff;
+      e.terms[a].push_back(t);
+    }
+  }
+}
+
+// Halfedge of face f whose opposite lies in face g, preferring one whose edge holds the point.
+int shared_halfedge(const TriMesh& mesh, int f, int g, const Vec3& barycentric) {
+  int found = -1;
+  for (int k = 0; k < 3; ++k) {
+    const int h = 3 * f + k;
+    const int o = mesh.opposite[h];
+    if (o < 0 || o / 3 != g) continue;
+    if (barycentric[(k + 2) % 3] == 0) return h;  // the point lies on this edge
+    if (found < 0) found = h;
+  }
+  return found;
+}
+
+// Halfedges crossed to carry point p (in face p.face) into face g: the shared edge, or for a point
+// on a mesh vertex the walk around the vertex (either way round; the vertex is regular where a
+// trace passes through it). Empty if none is found.
+std::vector<int> crossed_halfedges(const TriMesh& mesh, const SurfacePoint& p, int g) {
+  const int f = p.face;
+  const int h = shared_halfedge(mesh, f, g, p.barycentric);
+  if (h >= 0) return {h};
+  int k = -1;
+  for (int i = 0; i < 3; ++i)
+    if (p.barycentric[i] == 1) k = i;
+  if (k < 0) return {};
+  const int v = mesh.F(f, k);
+  for (int dir = 0; dir < 2; ++dir) {
+    std::vector<int> path;
+    int cur = f, came = -1;
+    for (int step = 0; step < 1024; ++step) {
+      if (cur == g) return path;
+      int i = 0;
+      while (mesh.F(cur, i) != v) ++i;
+      const int h1 = 3 * cur + i, h2 = 3 * cur + (i + 2) % 3;  // from v / to v
+      const int next = came < 0 ? (dir == 0 ? h1 : h2) : (came == h1 ? h2 : h1);
+      if (mesh.opposite[next] < 0) break;
+      path.push_back(next);
+      came = mesh.opposite[next];
+      cur = came / 3;
+      if (cur == f) break;
+    }
+  }
+  return {};
+}
+
+// Exact affine transfer of a double point across halfedge h with the sanitized map's transition.
+Vec2 transfer_point(const ExactParametrization& ex, int h, const Vec2& p) {
+  const Vec2 r = rotate_quarter(p, ex.rotation[h]);
+  return r + Vec2(ex.to_double(ex.translation[h][0]), ex.to_double(ex.translation[h][1]));
+}
+
+std::vector<CornerTerm> merge_terms(std::vector<CornerTerm> terms) {
+  std::sort(terms.begin(), terms.end(), [](const CornerTerm& a, const CornerTerm& b) {
+    return a.corner != b.corner ? a.corner < b.corner : a.axis < b.axis;
+  });
+  std::vector<CornerTerm> out;
+  for (const CornerTerm& t : terms) {
+    if (!out.empty() && out.back().corner == t.corner && out.back().axis == t.axis)
+      out.back().coeff += t.coeff;
+    else
+      out.push_back(t);
+  }
+  out.erase(std::remove_if(out.begin(), out.end(), [](const CornerTerm& t) { return t.coeff == 0; }), out.end());
+  return out;
+}
+
+// Unit direction of a T-edge (from -> to) in the chart of its trace's last face: read off the
+// sanitized map where the edge has a length, else its axis in the first chart carried along.
+Vec2 edge_direction(const TriMesh& mesh, const ExactParametrization& ex, const TMeshEdge& edge) {
+  Vec2 moved = edge.trace.front().uv;
+  int rotation = 0;
+  for (size_t i = 1; i < edge.trace.size(); ++i) {
+    if (edge.trace[i - 1].face == edge.trace[i].face) continue;
+    const std::vector<int> crossed = crossed_halfedges(mesh, edge.trace[i - 1], edge.trace[i].face);
+    if (crossed.empty())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: T-edge trace jumps between faces that do not touch");
+    for (int h : crossed) {
+      moved = transfer_point(ex, h, moved);
+      rotation += ex.rotation[h];
+    }
+  }
+  const Vec2 d = edge.trace.back().uv - moved;
+  Vec2 dir = Vec2::Zero();
+  if (d.norm() > 0) {
+    const int a = std::abs(d.x()) >= std::abs(d.y()) ? 0 : 1;
+    dir[a] = d[a] > 0 ? 1 : -1;
+  } else {
+    dir[edge.axis] = 1;
+    dir = rotate_quarter(dir, rotation);
+  }
+  return dir;
+}
+
+// Walks a path of T-edges carrying the start node's position (as an expression of the new map)
+// and the required offset (numeric) through the charts: at the end,  p_end = moved + offset.
+class PathWalker {
+ public:
+  PathWalker(const TriMesh& mesh, const std::vector<int8_t>& rotation, const TMesh& tmesh,
+             const std::vector<Vec2>& direction, const std::vector<double>& lengths)
+      : mesh_(mesh), rotation_(rotation), tmesh_(tmesh), direction_(direction), lengths_(lengths) {}
+
+  // Starts at the end of edge e that it would leave through (forward: from, backward: to).
+  void start(int e, bool forward) {
+    const TMeshEdge& edge = tmesh_.edges[e];
+    at_ = forward ? edge.trace.front() : edge.trace.back();
+    moved_ = surface_point_expr(at_);
+    offset_ = Vec2::Zero();
+  }
+  // Traverses edge e (forward: from -> to). The walker must stand on the edge's start node.
+  void traverse(int e, bool forward) {
+    const TMeshEdge& edge = tmesh_.edges[e];
+    const int n = static_cast<int>(edge.trace.size());
+    if (forward) {
+      enter(edge.trace.front());
+      for (int i = 1; i < n; ++i) step(edge.trace[i - 1], edge.trace[i]);
+      at_ = edge.trace.back();
+      offset_ += lengths_[e] * direction_[e];
+    } else {
+      enter(edge.trace.back());
+      offset_ -= lengths_[e] * direction_[e];
+      for (int i = n - 2; i >= 0; --i) step(edge.trace[i + 1], edge.trace[i]);
+      at_ = edge.trace.front();
+    }
+  }
+  // Rows  p_end - moved = offset  (both axes) for the node the walker stands on.
+  std::array<IgmRow, 2> rows() const {
+    const PointExpr end = surface_point_expr(at_);
+    std::array<IgmRow, 2> out;
+    for (int a = 0; a < 2; ++a) {
+      std::vector<CornerTerm> t = end.terms[a];
+      for (CornerTerm m : moved_.terms[a]) {
+        m.coeff = -m.coeff;
+        t.push_back(m);
+      }
+      out[a].terms = merge_terms(std::move(t));
+      out[a].rhs = offset_[a] + moved_.constant[a] - end.constant[a];
+    }
+    return out;
+  }
+
+ private:
+  void cross(int h) {
+    transfer(mesh_, rotation_, h, moved_);
+    offset_ = rotate_quarter(offset_, rotation_[h]);
+  }
+  // Same surface point: from a (in a.face) into b.face.
+  void step(const SurfacePoint& a, const SurfacePoint& b) {
+    if (a.face == b.face) return;
+    const std::vector<int> crossed = crossed_halfedges(mesh_, a, b.face);
+    if (crossed.empty())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: T-edge trace jumps between faces that do not touch");
+    for (int h : crossed) cross(h);
+  }
+  // Moves from the current face into p.face at the node (p given in its own face).
+  void enter(const SurfacePoint& p) {
+    if (p.face == at_.face) return;
+    const std::vector<int> back = crossed_halfedges(mesh_, p, at_.face);
+    if (back.empty())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: consecutive T-edges do not meet at a common node");
+    for (auto it = back.rbegin(); it != back.rend(); ++it) cross(mesh_.opposite[*it]);
+  }
+
+  const TriMesh& mesh_;
+  const std::vector<int8_t>& rotation_;
+  const TMesh& tmesh_;
+  const std::vector<Vec2>& direction_;
+  const std::vector<double>& lengths_;
+  SurfacePoint at_;
+  PointExpr moved_;
+  Vec2 offset_ = Vec2::Zero();
+};
+
+// Paper §7: paths in T between nodes whose position matters (singularities, feature/boundary
+// corners, seeds), over a BFS spanning tree; every edge outside the tree closes a loop. A path
+// never passes through a vertex with holonomy (the chart change there would be ambiguous): such
+// nodes end paths and start new ones. Returns the rows over the new map's corners.
+std::vector<IgmRow> path_rows(const TriMesh& mesh, const ExactParametrization& ex, const TMesh& tmesh,
+                              const std::vector<double>& lengths, int root, Progress& progress) {
+  const int nn = static_cast<int>(tmesh.nodes.size()), ne = static_cast<int>(tmesh.edges.size());
+  std::vector<int> holonomy(mesh.num_vertices(), 0);
+  for (int h = 0; h < mesh.num_halfedges(); ++h)
+    if (mesh.opposite[h] >= 0) holonomy[mesh.to(h)] += ex.rotation[h];
+  std::vector<char> terminal(nn, 0), important(nn, 0);
+  for (int n = 0; n < nn; ++n) {
+    const TMeshNode& node = tmesh.nodes[n];
+    const int v = node.mesh_vertex;
+    terminal[n] = n == root || (v >= 0 && holonomy[v] % 4 != 0 && !is_boundary_vertex(mesh, v));
+    important[n] = terminal[n] || node.singular() || node.kind == TMeshNode::Kind::FeatureCorner ||
+                   node.kind == TMeshNode::Kind::BoundaryNode || node.kind == TMeshNode::Kind::Seed;
+  }
+  std::vector<Vec2> direction(ne);
+  for (int e = 0; e < ne; ++e) {
+    if (tmesh.edges[e].trace.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: T-edge without a trace");
+    direction[e] = edge_direction(mesh, ex, tmesh.edges[e]);
+  }
+  // BFS tree: parent edge of each node.
+  std::vector<std::vector<int>> incident(nn);
+  for (int e = 0; e < ne; ++e) {
+    incident[tmesh.edges[e].from].push_back(e);
+    incident[tmesh.edges[e].to].push_back(e);
+  }
+  std::vector<int> parent(nn, -1), order;
+  std::vector<char> reached(nn, 0), tree_edge(ne, 0);
+  reached[root] = 1;
+  order.push_back(root);
+  for (size_t i = 0; i < order.size(); ++i) {
+    const int n = order[i];
+    for (int e : incident[n]) {
+      const int m = tmesh.edges[e].from == n ? tmesh.edges[e].to : tmesh.edges[e].from;
+      if (reached[m]) continue;
+      reached[m] = 1;
+      parent[m] = e;
+      tree_edge[e] = 1;
+      order.push_back(m);
+    }
+  }
+  for (int n = 0; n < nn; ++n)
+    if (!reached[n]) throw Error(ErrorCode::StageFailed, "integer-grid map: the T-mesh is not connected");
+  auto other = [&](int e, int n) { return tmesh.edges[e].from == n ? tmesh.edges[e].to : tmesh.edges[e].from; };
+  // Tree path from the nearest terminal ancestor down to n: (edge, forward) pairs.
+  auto tree_path = [&](int n) {
+    std::vector<std::pair<int, bool>> path;
+    while (!terminal[n]) {
+      const int e = parent[n];
+      path.push_back({e, tmesh.edges[e].to == n});
+      n = other(e, n);
+    }
+    std::reverse(path.begin(), path.end());
+    return path;
+  };
+  PathWalker walker(mesh, ex.rotation, tmesh, direction, lengths);
+  std::vector<IgmRow> rows;
+  auto emit = [&](const std::vector<std::pair<int, bool>>& path, int id) {
+    if (path.empty()) return;
+    walker.start(path[0].first, path[0].second);
+    for (const auto& [e, forward] : path) walker.traverse(e, forward);
+    for (IgmRow& r : walker.rows()) {
+      r.edge = id;
+      rows.push_back(std::move(r));
+    }
+  };
+  for (int n = 0; n < nn; ++n) {
+    if (n == root || !important[n]) continue;
+    // Up from n to its terminal ancestor: the path starts there.
+    emit(tree_path(n), parent[n]);
+    if (n % 64 == 0) progress.check_cancel();
+  }
+  for (int e = 0; e < ne; ++e) {
+    if (tree_edge[e]) continue;
+    // Loop: terminal ancestor of `from` -> from -> e -> to -> back up to to's terminal ancestor.
+    std::vector<std::pair<int, bool>> path = tree_path(tmesh.edges[e].from);
+    path.push_back({e, true});
+    std::vector<std::pair<int, bool>> back = tree_path(tmesh.edges[e].to);
+    for (auto it = back.rbegin(); it != back.rend(); ++it) path.push_back({it->first, !it->second});
+    emit(path, e);
+    if (e % 64 == 0) progress.check_cancel();
+  }
+  return rows;
+}
+
+double distance_to_integer(double v) { return std::abs(v - std::round(v)); }
+
+// Exact signed doubled area of face f.
+__int128 doubled_area(const ExactParametrization& p, int f) {
+  const IVec2 a = p.uv[3 * f], b = p.uv[3 * f + 1], c = p.uv[3 * f + 2];
+  return static_cast<__int128>(b[0] - a[0]) * (c[1] - a[1]) - static_cast<__int128>(b[1] - a[1]) * (c[0] - a[0]);
+}
+
+}  // namespace
+
+std::vector<IgmRow> integer_grid_rows(const TriMesh& mesh, const ExactParametrization& sanitized, const TMesh& tmesh,
+                                      const std::vector<double>& lengths, int root) {
+  if (lengths.size() != tmesh.edges.size() || root < 0 || root >= static_cast<int>(tmesh.nodes.size()))
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: one length per T-edge and a valid root expected");
+  Progress progress;
+  return path_rows(mesh, sanitized, tmesh, lengths, root, progress);
+}
+
+void count_exact_irregular(const ExactParametrization& param, int* flipped, int* degenerate) {
+  *flipped = *degenerate = 0;
+  const int nf = static_cast<int>(param.uv.size() / 3);
+  for (int f = 0; f < nf; ++f) {
+    const int s = orient2d_exact(param.uv[3 * f], param.uv[3 * f + 1], param.uv[3 * f + 2]);
+    *flipped += s < 0;
+    *degenerate += s == 0;
+  }
+}
+
+int64_t exact_parametric_area(const ExactParametrization& param, bool* integral) {
+  __int128 sum = 0;
+  const int nf = static_cast<int>(param.uv.size() / 3);
+  for (int f = 0; f < nf; ++f) sum += doubled_area(param, f);
+  const __int128 unit = static_cast<__int128>(param.one()) * param.one() * 2;
+  if (integral) *integral = sum % unit == 0;
+  return static_cast<int64_t>(sum / unit);
+}
+
+IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
+                                        const SeamlessMap& seamless, const ExactParametrization& sanitized,
+                                        const TMesh& tmesh, const QuantizationResult& quantization,
+                                        const IgmOptions& options, Progress& progress) {
+  Timer timer;
+  const int nf = mesh.num_faces(), nc = 3 * nf, ne = mesh.num_edges();
+  if (seamless.param.uv.rows() != nc || static_cast<int>(sanitized.uv.size()) != nc ||
+      static_cast<int>(sanitized.rotation.size()) != nc || static_cast<int>(cut.rotation.size()) != nc ||
+      static_cast<int>(cut.frame_u.size()) != nf || static_cast<int>(field.feature_edge.size()) != ne)
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the maps, field or cut graph do not match the mesh");
+  if (quantization.x.size() != tmesh.edges.size())
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the quantization does not match the T-mesh (" +
+                                                std::to_string(quantization.x.size()) + " lengths, " +
+                                                std::to_string(tmesh.edges.size()) + " edges)");
+  if (!quantization.valid)
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the quantization is invalid: " + quantization.invalid_reason);
+  if (!(quantization.scale > 0) || !(options.edge_length > 0))
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: scale and edge length must be positive");
+  if (tmesh.nodes.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: empty T-mesh");
+  for (int h = 0; h < nc; ++h)
+    if (sanitized.rotation[h] != seamless.param.rotation[h])
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: the sanitized and the seamless map have different transitions");
+
+  IntegerGridMap result;
+  IgmStats& stats = result.stats;
+  const double scale = quantization.scale;
+
+  // The problem at the quantization's scale: 1 uv unit = one quad edge.
+  ParametrizationProblem problem(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
+                                 options.edge_length / scale);
+  const IsolineSelection isolines = select_isolines(mesh, field, cut);
+  for (const auto& [h, axis] : isolines.isolines) problem.add_isoline(h, axis);
+
+  // C z = b: paths between singular / corner nodes (tree + loops), and the root at its rounded
+  // position (the first singular node on a mesh vertex, else the first node).
+  int root = 0;
+  for (size_t n = 0; n < tmesh.nodes.size(); ++n)
+    if (tmesh.nodes[n].singular() && tmesh.nodes[n].mesh_vertex >= 0) {
+      root = static_cast<int>(n);
+      break;
+    }
+  std::vector<double> lengths(quantization.x.begin(), quantization.x.end());
+  const std::vector<IgmRow> rows = path_rows(mesh, sanitized, tmesh, lengths, root, progress);
+  for (const IgmRow& r : rows) {
+    if (r.terms.empty()) {
+      if (std::abs(r.rhs) > 0)
+        throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
+      continue;
+    }
+    problem.add_linear_constraint(r.terms, r.rhs);
+    ++stats.constraints;
+  }
+  {
+    const SurfacePoint& p = tmesh.nodes[root].point;
+    const PointExpr e = surface_point_expr(p);
+    for (int a = 0; a < 2; ++a) {
+      problem.add_linear_constraint(e.terms[a], std::round(scale * p.uv[a]));
+      ++stats.constraints;
+    }
+  }
+  problem.set_pin_translation(false);
+
+  // Penalty phase with re-linearization, then the hard solve around the last pose (§7.1).
+  Timer solve_timer;
+  Parametrization pose = seamless.param;
+  pose.uv *= scale;
+  ParametrizationSolveOptions so;
+  so.penalty_weight = options.penalty_weight;
+  so.max_repair_rounds = options.max_repair_rounds;
+  so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
+  ParametrizationSolution solution;
+  const int rounds = std::max(1, options.max_penalty_rounds);
+  for (int round = 0; round < rounds; ++round) {
+    so.linear_constraints = ConstraintMode::Penalty;
+    so.reference = &pose;
+    so.progress_begin = 0.7 * round / rounds;
+    so.progress_end = 0.7 * (round + 1) / rounds;
+    solution = problem.solve(so, progress);
+    ++stats.penalty_iterations;
+    stats.ipopt_solves += solution.stats.ipopt_solves;
+    stats.ipopt_iterations += solution.stats.ipopt_iterations;
+    pose = solution.param;
+    stats.penalty_violation.push_back(solution.stats.constraint_violation);
+    if (solution.stats.constraint_violation <= options.penalty_tolerance) break;
+  }
+  // Hard phase: the integer quantities that Cz = b determines — positions of the singular and
+  // corner vertices, cut translations, feature/boundary isoline values — rounded from the penalty
+  // optimum (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the
+  // exact elimination stays integral (the T-edge rows themselves carry barycentric coefficients
+  // and are highly redundant).
+  const std::vector<char> snap_vertices = independent_vertices(mesh, pose, tmesh);
+  const std::vector<IsolineConstraint> iso = isoline_constraints(mesh, pose, field.feature_edge, true);
+  problem.clear_linear_constraints();
+  std::vector<char> wedge_done(problem.num_wedges(), 0);
+  for (int c = 0; c < nc; ++c) {
+    const int w = problem.wedge_of_corner()[c];
+    if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
+    wedge_done[w] = 1;
+    for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(pose.uv(c, a)));
+  }
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh.opposite[h];
+    if (o < 0 || o < h || !pose.is_cut[mesh.edge_of[h]]) continue;
+    PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
+    transfer(mesh, pose.rotation, h, t);
+    const Vec2 value = pose.translation(mesh, h);
+    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
+  }
+  for (const IsolineConstraint& c : iso) problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(pose.uv(c.halfedge, c.axis)));
+  so.linear_constraints = ConstraintMode::Hard;
+  so.reference = &pose;
+  so.progress_begin = 0.7;
+  so.progress_end = 0.85;
+  solution = problem.solve(so, progress);
+  stats.ipopt_solves += solution.stats.ipopt_solves;
+  stats.ipopt_iterations += solution.stats.ipopt_iterations;
+  for (const IgmRow& r : rows) {
+    double value = -r.rhs;
+    for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
+    stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
+  }
+  stats.seconds_solve = solve_timer.seconds();
+  result.continuous = solution.param;
+  const Parametrization& solved = result.continuous;
+
+  // Exact rounding: singular/corner vertices snapped to integers (translations become integral),
+  // feature and boundary edges exact isolines on integer values.
+  Timer sanitize_timer;
+  SanitizeOptions sanitize;
+  sanitize.fraction_bits = options.fraction_bits;
+  sanitize.snap_bits = 0;
+  sanitize.snap_vertex = snap_vertices;
+  sanitize.snap_corner_axes.assign(nc, 0);
+  for (const IsolineConstraint& c : iso) {
+    const int f = c.halfedge / 3, k = c.halfedge % 3;
+    sanitize.snap_corner_axes[3 * f + k] |= uint8_t(1 << c.axis);
+    sanitize.snap_corner_axes[3 * f + (k + 1) % 3] |= uint8_t(1 << c.axis);
+  }
+  // Distance from integers before snapping.
+  for (int c = 0; c < nc; ++c) {
+    const int v = mesh.F(c / 3, c % 3);
+    for (int a = 0; a < 2; ++a)
+      if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
+        stats.max_integer_residual = std::max(stats.max_integer_residual, distance_to_integer(solved.uv(c, a)));
+  }
+  for (int h = 0; h < nc; ++h) {
+    if (mesh.opposite[h] < 0 || !solved.is_cut[mesh.edge_of[h]]) continue;
+    const Vec2 t = solved.translation(mesh, h);
+    stats.max_integer_residual =
+        std::max({stats.max_integer_residual, distance_to_integer(t.x()), distance_to_integer(t.y())});
+  }
+  progress.update(0.88);
+  SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
+  stats.unresolved_equations = exact.unresolved_equations;
+  stats.seconds_sanitize = sanitize_timer.seconds();
+  result.param = std::move(exact.param);
+  count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
+  stats.path = "global";
+
+  stats.parametric_area = exact_parametric_area(result.param, &stats.area_is_integral);
+  stats.seconds = timer.seconds();
+  progress.update(1.0);
+  return result;
+}
+
+Json igm_report(const IgmStats& s) {
+  return Json{{"flipped_triangles", s.flipped_triangles},
+              {"degenerate_triangles", s.degenerate_triangles},
+              {"max_integer_residual", s.max_integer_residual},
+              {"fallback_used", s.fallback_used},
+              {"penalty_iterations", s.penalty_iterations},
+              {"seconds", s.seconds},
+              {"path", s.path},
+              {"constraints", s.constraints},
+              {"max_constraint_violation", s.max_constraint_violation},
+              {"unresolved_equations", s.unresolved_equations},
+              {"parametric_area", s.parametric_area},
+              {"ipopt_solves", s.ipopt_solves},
+              {"ipopt_iterations", s.ipopt_iterations},
+              {"seconds_solve", s.seconds_solve},
+              {"seconds_sanitize", s.seconds_sanitize}};
+}
+
+}  // namespace qgp
