@@ -197,8 +197,9 @@ def scaling_plots(rows, images):
             pts = sorted((int(r[xkey]), number(r["wall_s"]), number(r["peak_rss_mb"])) for r in rs
                          if r["shape"] == shape)
             x = [p[0] for p in pts]
-            ax_t.plot(x, [p[1] for p in pts], marker="o", label=f"{shape} total (wall)")
-            ax_m.plot(x, [p[2] for p in pts], marker="o", label=shape)
+            nan = float("nan")
+            ax_t.plot(x, [nan if p[1] is None else p[1] for p in pts], marker="o", label=f"{shape} total (wall)")
+            ax_m.plot(x, [nan if p[2] is None else p[2] for p in pts], marker="o", label=shape)
         failed = [(int(r[xkey]), number(r["wall_s"])) for r in rs if r["status"] != "ok"]
         if failed:
             ax_t.scatter(*zip(*failed), marker="x", color="black", zorder=3, label="run refused / timed out")

@@ -131,7 +131,9 @@ def run_qgp(qgp, path, target, out_dir, timeout):
     wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(exit_status)
     stderr = proc.stderr.read().decode(errors="replace").strip()
-    peak_mb = usage.ru_maxrss / 1024.0  # Linux: kilobytes
+    # Linux: kilobytes. Not for a killed run under GNU time: that figure would be GNU time's own, which
+    # inherits this Python's high-water mark.
+    peak_mb = None if status == "timeout" and GNU_TIME in cmd else usage.ru_maxrss / 1024.0
     if os.path.exists(rss_path):
         with open(rss_path) as f:
             lines = [line for line in f.read().split() if line.isdigit()]
@@ -157,7 +159,7 @@ def row_for(series, shape, level, triangles, target, result):
     status, message, wall, peak_mb, report = result
     timings = report.get("timings_s", {})
     row = {"series": series, "shape": shape, "level": level, "triangles": triangles, "target": target,
-           "status": status, "message": message, "wall_s": round(wall, 3), "peak_rss_mb": round(peak_mb, 1),
+           "status": status, "message": message, "wall_s": round(wall, 3), "peak_rss_mb": None if peak_mb is None else round(peak_mb, 1),
            "total_s": timings.get("total")}
     quad = report.get("quad") or report.get("quads") or {}  # the report object was renamed "quad"
     row["quads"] = quad.get("faces")
