@@ -171,6 +171,11 @@ def compare_plots(rows, images):
 
 # -- scaling --
 
+def peak_mb(row):
+    """Peak memory of a run; none for a killed run (its figure is not the pipeline's, see scaling.py)."""
+    return None if row["status"] == "timeout" else number(row["peak_rss_mb"])
+
+
 def scaling_markdown(rows):
     lines = ["| series | shape | triangles | target | status | wall s | peak MB | quads | "
              + " | ".join(s.replace("_", " ") for s in STAGES) + " |",
@@ -181,7 +186,7 @@ def scaling_markdown(rows):
             message = r["message"].replace("|", "/")
             status += ": " + (message if len(message) <= 50 else message[:47] + "...")
         lines.append(f"| {r['series']} | {r['shape']} | {int(r['triangles']):,} | {r['target']} | {status} "
-                     f"| {fmt(r['wall_s'], '.2f')} | {fmt(r['peak_rss_mb'], '.0f')} | {fmt(r['quads'], '.0f')} | "
+                     f"| {fmt(r['wall_s'], '.2f')} | {fmt(peak_mb(r), '.0f')} | {fmt(r['quads'], '.0f')} | "
                      + " | ".join(fmt(r[s + '_s'], '.2f') for s in STAGES) + " |")
     return "\n".join(lines) + "\n"
 
@@ -194,7 +199,7 @@ def scaling_plots(rows, images):
             continue
         fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(11, 4.2))
         for shape in sorted({r["shape"] for r in rs}):
-            pts = sorted((int(r[xkey]), number(r["wall_s"]), number(r["peak_rss_mb"])) for r in rs
+            pts = sorted((int(r[xkey]), number(r["wall_s"]), peak_mb(r)) for r in rs
                          if r["shape"] == shape)
             x = [p[0] for p in pts]
             nan = float("nan")
