@@ -300,8 +300,16 @@ std::vector<IgmRow> path_rows(const TriMesh& mesh, const ExactParametrization& e
   };
   for (int n = 0; n < nn; ++n) {
     if (n == root || !important[n]) continue;
-    // Up from n to its terminal ancestor: the path starts there.
-    emit(tree_path(n), parent[n]);
+    // From the terminal ancestor down to n (a terminal n is reached through its parent edge).
+    std::vector<std::pair<int, bool>> path;
+    if (terminal[n]) {
+      const int e = parent[n];
+      path = tree_path(other(e, n));
+      path.push_back({e, tmesh.edges[e].to == n});
+    } else {
+      path = tree_path(n);
+    }
+    emit(path, parent[n]);
     if (n % 64 == 0) progress.check_cancel();
   }
   for (int e = 0; e < ne; ++e) {
@@ -424,10 +432,12 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   so.penalty_weight = options.penalty_weight;
   so.max_repair_rounds = options.max_repair_rounds;
   so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
+  so.relinearization_rounds = options.relinearization_rounds;
   ParametrizationSolution solution;
   const int rounds = std::max(1, options.max_penalty_rounds);
   for (int round = 0; round < rounds; ++round) {
     so.linear_constraints = ConstraintMode::Penalty;
+    so.regularity = options.regularity && options.penalty_regularity ? RegularityMode::Repair : RegularityMode::Off;
     so.reference = &pose;
     so.progress_begin = 0.7 * round / rounds;
     so.progress_end = 0.7 * (round + 1) / rounds;
@@ -464,6 +474,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   }
   for (const IsolineConstraint& c : iso) problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(pose.uv(c.halfedge, c.axis)));
   so.linear_constraints = ConstraintMode::Hard;
+  so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   so.reference = &pose;
   so.progress_begin = 0.7;
   so.progress_end = 0.85;
@@ -476,12 +487,9 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
   }
   stats.seconds_solve = solve_timer.seconds();
-  result.continuous = solution.param;
-  const Parametrization& solved = result.continuous;
 
   // Exact rounding: singular/corner vertices snapped to integers (translations become integral),
   // feature and boundary edges exact isolines on integer values.
-  Timer sanitize_timer;
   SanitizeOptions sanitize;
   sanitize.fraction_bits = options.fraction_bits;
   sanitize.snap_bits = 0;
@@ -492,26 +500,63 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     sanitize.snap_corner_axes[3 * f + k] |= uint8_t(1 << c.axis);
     sanitize.snap_corner_axes[3 * f + (k + 1) % 3] |= uint8_t(1 << c.axis);
   }
-  // Distance from integers before snapping.
-  for (int c = 0; c < nc; ++c) {
-    const int v = mesh.F(c / 3, c % 3);
-    for (int a = 0; a < 2; ++a)
-      if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
-        stats.max_integer_residual = std::max(stats.max_integer_residual, distance_to_integer(solved.uv(c, a)));
-  }
-  for (int h = 0; h < nc; ++h) {
-    if (mesh.opposite[h] < 0 || !solved.is_cut[mesh.edge_of[h]]) continue;
-    const Vec2 t = solved.translation(mesh, h);
-    stats.max_integer_residual =
-        std::max({stats.max_integer_residual, distance_to_integer(t.x()), distance_to_integer(t.y())});
-  }
-  progress.update(0.88);
-  SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
-  stats.unresolved_equations = exact.unresolved_equations;
-  stats.seconds_sanitize = sanitize_timer.seconds();
-  result.param = std::move(exact.param);
-  count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
+  // Distance from integers of what snapping rounds.
+  auto integer_residual = [&](const Parametrization& map) {
+    double worst = 0;
+    for (int c = 0; c < nc; ++c) {
+      const int v = mesh.F(c / 3, c % 3);
+      for (int a = 0; a < 2; ++a)
+        if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
+          worst = std::max(worst, distance_to_integer(map.uv(c, a)));
+    }
+    for (int h = 0; h < nc; ++h) {
+      if (mesh.opposite[h] < 0 || !map.is_cut[mesh.edge_of[h]]) continue;
+      const Vec2 t = map.translation(mesh, h);
+      worst = std::max({worst, distance_to_integer(t.x()), distance_to_integer(t.y())});
+    }
+    return worst;
+  };
+  stats.penalty_integer_residual = integer_residual(pose);
+  auto round_exactly = [&](const Parametrization& solved) {
+    Timer sanitize_timer;
+    result.continuous = solved;
+    stats.max_integer_residual = integer_residual(solved);
+    SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
+    stats.unresolved_equations = exact.unresolved_equations;
+    result.param = std::move(exact.param);
+    count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
+    stats.seconds_sanitize += sanitize_timer.seconds();
+  };
+  progress.update(0.86);
+  round_exactly(solution.param);
   stats.path = "global";
+
+  // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
+  // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
+  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity && options.allow_fallback) {
+    Parametrization seamless_pose = seamless.param;
+    seamless_pose.uv *= scale;
+    so.regularity = RegularityMode::AllFaces;
+    so.reference = &seamless_pose;
+    so.progress_begin = 0.9;
+    so.progress_end = 0.99;
+    const ParametrizationSolution all = problem.solve(so, progress);
+    stats.ipopt_solves += all.stats.ipopt_solves;
+    stats.ipopt_iterations += all.stats.ipopt_iterations;
+    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    const IntegerGridMap global = result;
+    const IgmStats global_stats = stats;
+    round_exactly(all.param);
+    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
+      stats.fallback_used = true;
+      stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles before)";
+    } else {
+      result.continuous = global.continuous;
+      result.param = global.param;
+      stats = global_stats;
+      stats.path = "global (all-faces fallback did not help)";
+    }
+  }
 
   stats.parametric_area = exact_parametric_area(result.param, &stats.area_is_integral);
   stats.seconds = timer.seconds();
@@ -527,6 +572,7 @@ Json igm_report(const IgmStats& s) {
               {"penalty_iterations", s.penalty_iterations},
               {"seconds", s.seconds},
               {"path", s.path},
+              {"penalty_integer_residual", s.penalty_integer_residual},
               {"constraints", s.constraints},
               {"max_constraint_violation", s.max_constraint_violation},
               {"unresolved_equations", s.unresolved_equations},

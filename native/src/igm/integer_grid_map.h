@@ -35,9 +35,16 @@ struct IgmOptions {
   double penalty_tolerance = 1e-4;  // stop the penalty phase at ‖Cz − b‖∞ ≤ this (quad units)
   int max_penalty_rounds = 8;    // penalty solves (each re-linearized around the previous one)
   int max_repair_rounds = 24;    // Ipopt repair rounds per solve
+  int relinearization_rounds = 1;  // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;        // of the exact result
   bool regularity = true;        // Ipopt repair of flipped triangles (off: equality-only solves)
-  bool allow_fallback = true;    // §7.1.1 fallback when the global solve stays irregular
+  // Regularity also in the penalty solves (paper §7.1). Off: the penalty phase only fixes the
+  // integer values (they follow from Cz = b, not from the regularity) and the hard solve alone
+  // repairs flips, linearized around the seamless map's healthy triangles.
+  bool penalty_regularity = true;
+  // When the exact map has flipped/degenerate triangles: hard solve again with all triangles
+  // under tri-sector constraints around the seamless map (not yet the paper's §7.1.1 per-cell map).
+  bool allow_fallback = true;
 };
 
 struct IgmStats {
@@ -45,6 +52,7 @@ struct IgmStats {
   int degenerate_triangles = 0;     // in the exact result
   double max_integer_residual = 0;  // before snapping: largest distance of a singular vertex /
                                     // transition translation / feature isoline from an integer
+  double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)
   double max_constraint_violation = 0;  // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
   bool fallback_used = false;
   std::string path;                 // "global" or "fallback: <what ran>"
