@@ -4,6 +4,7 @@
 // isolines, no flipped or degenerate triangle, parametric area == quads_expected == quad count.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -156,7 +157,7 @@ void print_row(const Figures& f) {
             << std::setw(6) << f.faces << " | " << std::setw(6) << f.quads_expected << " | " << std::setw(6) << f.quads
             << " | " << f.stats.penalty_iterations << " | " << (f.stats.fallback_used ? "yes" : "no") << " | "
             << f.stats.flipped_triangles << "/" << f.stats.degenerate_triangles << " | " << std::setprecision(3)
-            << f.stats.max_integer_residual << " | " << f.stats.seconds << " | " << f.seconds_before << " | "
+            << f.stats.max_integer_residual << " | " << f.stats.penalty_integer_residual << " | " << f.stats.seconds << " | " << f.seconds_before << " | "
             << f.stats.path << (f.failure.empty() ? "" : " | FAILED: " + f.failure) << std::endl;
 }
 
@@ -258,6 +259,21 @@ TEST(Igm, MismatchedInputsAreRefused) {
   EXPECT_THROW(run_igm(e), Error);
 }
 
+TEST(Igm, CancelStopsWithCancelledError) {
+  const IntakeResult intake = test::load_mesh("spot.obj");
+  const Chain c = run_chain(test::component_mesh(intake, 0), -1, 500, 500);
+  std::atomic<bool> cancel{true};
+  Progress progress(nullptr, &cancel);
+  IgmOptions options;
+  options.edge_length = c.edge_length;
+  try {
+    compute_integer_grid_map(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options, progress);
+    ADD_FAILURE() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Cancelled);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Every manifold mesh at about 500 and 2000 quads (features at 40 degrees on the CAD meshes).
 
@@ -271,7 +287,7 @@ const std::set<std::string> kEarlierStageFailures = {"armadillo.obj", "block.obj
 
 void sweep(const std::vector<std::string>& names) {
   std::cout << "[igm] mesh | target | tri faces | quads expected | quads | penalty iterations | fallback | "
-               "flipped/degenerate | max integer residual | igm s | chain s | path" << std::endl;
+               "flipped/degenerate | max integer residual (hard / penalty) | igm s | chain s | path" << std::endl;
   for (const std::string& name : names) {
     const IntakeResult intake = test::load_mesh(name);
     std::optional<Chain> chain;

@@ -405,88 +405,99 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     }
   std::vector<double> lengths(quantization.x.begin(), quantization.x.end());
   const std::vector<IgmRow> rows = path_rows(mesh, sanitized, tmesh, lengths, root, progress);
-  for (const IgmRow& r : rows) {
-    if (r.terms.empty()) {
-      if (std::abs(r.rhs) > 0)
-        throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
-      continue;
-    }
-    problem.add_linear_constraint(r.terms, r.rhs);
-    ++stats.constraints;
-  }
-  {
-    const SurfacePoint& p = tmesh.nodes[root].point;
-    const PointExpr e = surface_point_expr(p);
-    for (int a = 0; a < 2; ++a) {
-      problem.add_linear_constraint(e.terms[a], std::round(scale * p.uv[a]));
-      ++stats.constraints;
-    }
-  }
+  for (const IgmRow& r : rows)
+    if (r.terms.empty() && std::abs(r.rhs) > 0)
+      throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
+  const SurfacePoint& root_point = tmesh.nodes[root].point;
+  auto add_path_constraints = [&]() {
+    problem.clear_linear_constraints();
+    int count = 0;
+    for (const IgmRow& r : rows)
+      if (!r.terms.empty()) problem.add_linear_constraint(r.terms, r.rhs), ++count;
+    const PointExpr e = surface_point_expr(root_point);
+    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(e.terms[a], std::round(scale * root_point.uv[a])), ++count;
+    stats.constraints = count;
+  };
   problem.set_pin_translation(false);
 
-  // Penalty phase with re-linearization, then the hard solve around the last pose (§7.1).
   Timer solve_timer;
-  Parametrization pose = seamless.param;
-  pose.uv *= scale;
+  Parametrization seamless_pose = seamless.param;
+  seamless_pose.uv *= scale;
   ParametrizationSolveOptions so;
   so.penalty_weight = options.penalty_weight;
   so.max_repair_rounds = options.max_repair_rounds;
-  so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   so.relinearization_rounds = options.relinearization_rounds;
-  ParametrizationSolution solution;
-  const int rounds = std::max(1, options.max_penalty_rounds);
-  for (int round = 0; round < rounds; ++round) {
-    so.linear_constraints = ConstraintMode::Penalty;
-    so.regularity = options.regularity && options.penalty_regularity ? RegularityMode::Repair : RegularityMode::Off;
-    so.reference = &pose;
-    so.progress_begin = 0.7 * round / rounds;
-    so.progress_end = 0.7 * (round + 1) / rounds;
+  const RegularityMode repair = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
+  Parametrization pose;
+  std::vector<char> snap_vertices;
+  std::vector<IsolineConstraint> iso;
+  // Penalty phase with re-linearization (§7.1), then the hard solve around the last pose. Hard
+  // phase: the integer quantities that Cz = b determines — positions of the singular and corner
+  // vertices, cut translations, feature/boundary isoline values — rounded from the penalty optimum
+  // (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the exact
+  // elimination stays integral (the path rows carry barycentric coefficients).
+  auto solve_global = [&](bool penalty_regularity, double begin, double end) {
+    add_path_constraints();
+    pose = seamless_pose;
+    ParametrizationSolution solution;
+    const int rounds = std::max(1, options.max_penalty_rounds);
+    for (int round = 0; round < rounds; ++round) {
+      so.linear_constraints = ConstraintMode::Penalty;
+      so.regularity = penalty_regularity ? repair : RegularityMode::Off;
+      so.reference = &pose;
+      so.progress_begin = begin + (end - begin) * 0.7 * round / rounds;
+      so.progress_end = begin + (end - begin) * 0.7 * (round + 1) / rounds;
+      solution = problem.solve(so, progress);
+      ++stats.penalty_iterations;
+      stats.ipopt_solves += solution.stats.ipopt_solves;
+      stats.ipopt_iterations += solution.stats.ipopt_iterations;
+      stats.penalty_violation.push_back(solution.stats.constraint_violation);
+      if (penalty_regularity) pose = solution.param;  // the next round is linearized around it
+      // Without regularity the next round would give the same result.
+      if (solution.stats.constraint_violation <= options.penalty_tolerance || !penalty_regularity) break;
+    }
+    const Parametrization& integers = solution.param;
+    snap_vertices = independent_vertices(mesh, integers, tmesh);
+    iso = isoline_constraints(mesh, integers, field.feature_edge, true);
+    problem.clear_linear_constraints();
+    std::vector<char> wedge_done(problem.num_wedges(), 0);
+    for (int c = 0; c < nc; ++c) {
+      const int w = problem.wedge_of_corner()[c];
+      if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
+      wedge_done[w] = 1;
+      for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(integers.uv(c, a)));
+    }
+    for (int h = 0; h < nc; ++h) {
+      const int o = mesh.opposite[h];
+      if (o < 0 || o < h || !integers.is_cut[mesh.edge_of[h]]) continue;
+      PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
+      transfer(mesh, integers.rotation, h, t);
+      const Vec2 value = integers.translation(mesh, h);
+      for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
+    }
+    for (const IsolineConstraint& c : iso)
+      problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(integers.uv(c.halfedge, c.axis)));
+    // The hard solve is linearized around the penalty optimum where it is healthy and around the
+    // seamless map elsewhere.
+    const Parametrization penalty_optimum = integers;
+    so.linear_constraints = ConstraintMode::Hard;
+    so.regularity = repair;
+    so.reference = penalty_regularity ? &pose : &seamless_pose;
+    so.progress_begin = begin + (end - begin) * 0.7;
+    so.progress_end = end;
     solution = problem.solve(so, progress);
-    ++stats.penalty_iterations;
+    pose = penalty_optimum;
     stats.ipopt_solves += solution.stats.ipopt_solves;
     stats.ipopt_iterations += solution.stats.ipopt_iterations;
-    pose = solution.param;
-    stats.penalty_violation.push_back(solution.stats.constraint_violation);
-    if (solution.stats.constraint_violation <= options.penalty_tolerance) break;
-  }
-  // Hard phase: the integer quantities that Cz = b determines — positions of the singular and
-  // corner vertices, cut translations, feature/boundary isoline values — rounded from the penalty
-  // optimum (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the
-  // exact elimination stays integral (the T-edge rows themselves carry barycentric coefficients
-  // and are highly redundant).
-  const std::vector<char> snap_vertices = independent_vertices(mesh, pose, tmesh);
-  const std::vector<IsolineConstraint> iso = isoline_constraints(mesh, pose, field.feature_edge, true);
-  problem.clear_linear_constraints();
-  std::vector<char> wedge_done(problem.num_wedges(), 0);
-  for (int c = 0; c < nc; ++c) {
-    const int w = problem.wedge_of_corner()[c];
-    if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
-    wedge_done[w] = 1;
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(pose.uv(c, a)));
-  }
-  for (int h = 0; h < nc; ++h) {
-    const int o = mesh.opposite[h];
-    if (o < 0 || o < h || !pose.is_cut[mesh.edge_of[h]]) continue;
-    PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
-    transfer(mesh, pose.rotation, h, t);
-    const Vec2 value = pose.translation(mesh, h);
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
-  }
-  for (const IsolineConstraint& c : iso) problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(pose.uv(c.halfedge, c.axis)));
-  so.linear_constraints = ConstraintMode::Hard;
-  so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
-  so.reference = &pose;
-  so.progress_begin = 0.7;
-  so.progress_end = 0.85;
-  solution = problem.solve(so, progress);
-  stats.ipopt_solves += solution.stats.ipopt_solves;
-  stats.ipopt_iterations += solution.stats.ipopt_iterations;
-  for (const IgmRow& r : rows) {
-    double value = -r.rhs;
-    for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
-    stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
-  }
-  stats.seconds_solve = solve_timer.seconds();
+    stats.max_constraint_violation = 0;
+    for (const IgmRow& r : rows) {
+      double value = -r.rhs;
+      for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
+      stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
+    }
+    return solution;
+  };
+  ParametrizationSolution solution = solve_global(options.penalty_regularity, 0, 0.4);
 
   // Exact rounding: singular/corner vertices snapped to integers (translations become integral),
   // feature and boundary edges exact isolines on integer values.
@@ -516,7 +527,6 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     }
     return worst;
   };
-  stats.penalty_integer_residual = integer_residual(pose);
   auto round_exactly = [&](const Parametrization& solved) {
     Timer sanitize_timer;
     result.continuous = solved;
@@ -527,9 +537,31 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
     stats.seconds_sanitize += sanitize_timer.seconds();
   };
-  progress.update(0.86);
+  progress.update(0.42);
   round_exactly(solution.param);
-  stats.path = "global";
+  stats.path = options.penalty_regularity ? "global" : "global (penalty without regularity)";
+  stats.penalty_integer_residual = integer_residual(pose);
+
+  // Escalation: the paper's penalty phase with re-linearized regularity constraints.
+  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity &&
+      !options.penalty_regularity) {
+    const IntegerGridMap first = result;
+    const IgmStats first_stats = stats;
+    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    solution = solve_global(true, 0.45, 0.85);
+    round_exactly(solution.param);
+    stats.penalty_integer_residual = integer_residual(pose);
+    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
+      stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles without)";
+    } else {
+      result.continuous = first.continuous;
+      result.param = first.param;
+      const int iterations = stats.penalty_iterations;
+      stats = first_stats;
+      stats.penalty_iterations = iterations;
+    }
+  }
+  stats.seconds_solve = solve_timer.seconds();
 
   // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
   // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
@@ -538,7 +570,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     seamless_pose.uv *= scale;
     so.regularity = RegularityMode::AllFaces;
     so.reference = &seamless_pose;
-    so.progress_begin = 0.9;
+    so.progress_begin = 0.88;
     so.progress_end = 0.99;
     const ParametrizationSolution all = problem.solve(so, progress);
     stats.ipopt_solves += all.stats.ipopt_solves;

@@ -38,10 +38,11 @@ struct IgmOptions {
   int relinearization_rounds = 1;  // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;        // of the exact result
   bool regularity = true;        // Ipopt repair of flipped triangles (off: equality-only solves)
-  // Regularity also in the penalty solves (paper §7.1). Off: the penalty phase only fixes the
-  // integer values (they follow from Cz = b, not from the regularity) and the hard solve alone
-  // repairs flips, linearized around the seamless map's healthy triangles.
-  bool penalty_regularity = true;
+  // Regularity also in the penalty solves (paper §7.1). Off (default, much faster): one
+  // equality-only penalty solve fixes the integer values (they follow from Cz = b, not from the
+  // regularity) and the hard solve alone repairs flips, linearized around the seamless map; if
+  // flips remain, the paper's re-linearized penalty phase runs as well and the better map is kept.
+  bool penalty_regularity = false;
   // When the exact map has flipped/degenerate triangles: hard solve again with all triangles
   // under tri-sector constraints around the seamless map (not yet the paper's §7.1.1 per-cell map).
   bool allow_fallback = true;
@@ -56,7 +57,7 @@ struct IgmStats {
   double max_constraint_violation = 0;  // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
   bool fallback_used = false;
   std::string path;                 // "global" or "fallback: <what ran>"
-  int penalty_iterations = 0;       // penalty solves run
+  int penalty_iterations = 0;       // penalty solves run (all attempts)
   std::vector<double> penalty_violation;  // ‖Cz − b‖∞ after each penalty solve
   int constraints = 0;              // scalar rows of C
   int unresolved_equations = 0;     // of the sanitization (0 expected)
