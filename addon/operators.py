@@ -23,9 +23,10 @@ def _load_library(context):
     binding.load_library(bpy.path.abspath(path) if path else None)
 
 
-def _session_for(obj, source, sharp_angle, kind):
-    """A native session for this geometry and feature setup, cached per object and job kind."""
-    key = (obj.name, kind)
+def _session_for(obj, source, sharp_angle):
+    """A native session for this geometry and feature setup, cached per object: quad remesh and
+    grid UVs share its stages, and a new density only re-quantizes."""
+    key = obj.name
     settings = (source.fingerprint(), sharp_angle)
     cached = _session_cache.get(key)
     if cached and cached[0] == settings:
@@ -128,7 +129,7 @@ class _TargetProperties:
         if len(self._source.triangles) == 0:
             raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
         angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
-        session = _session_for(self._source_obj, self._source, angle, self._job)
+        session = _session_for(self._source_obj, self._source, angle)
         if self.target_mode == "FACES":
             session.set_option("target_faces", self.target_faces)
         else:

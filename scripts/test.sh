@@ -17,7 +17,8 @@ cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-ctest --test-dir build-asan --output-on-failure -j2 -L native -LE slow
+# Real-mesh sweeps (suites named *Meshes*) and benchmarks run in the Release pass only.
+ctest --test-dir build-asan --output-on-failure -j2 -L native -E 'Meshes|Bench'
 
 echo "== fuzzing (${QGP_FUZZ_SECONDS:-45} s per target)"
 unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS

@@ -47,4 +47,21 @@ void write_obj(const std::string& path, const TriMesh& mesh,
   if (std::ferror(out) || std::fflush(out) != 0) throw std::runtime_error("cannot write '" + path + "'");
 }
 
+void write_quad_obj(const std::string& path, const QuadMesh& quads, const std::string& header) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (!file) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
+  FILE* out = file.get();
+  std::istringstream lines(header);
+  for (std::string line; std::getline(lines, line);) std::fprintf(out, "# %s\n", line.c_str());
+  for (int v = 0; v < quads.num_vertices(); ++v)
+    std::fprintf(out, "v %.17g %.17g %.17g\n", quads.V(v, 0), quads.V(v, 1), quads.V(v, 2));
+  // One object per input component (quads of a component are contiguous).
+  for (int q = 0; q < quads.num_quads(); ++q) {
+    const int c = quads.component.empty() ? 0 : quads.component[q];
+    if (q == 0 || (!quads.component.empty() && c != quads.component[q - 1])) std::fprintf(out, "o component_%d\n", c);
+    std::fprintf(out, "f %d %d %d %d\n", quads.Q(q, 0) + 1, quads.Q(q, 1) + 1, quads.Q(q, 2) + 1, quads.Q(q, 3) + 1);
+  }
+  if (std::ferror(out) || std::fflush(out) != 0) throw std::runtime_error("cannot write '" + path + "'");
+}
+
 }  // namespace qgp::cli

@@ -4,6 +4,7 @@
 
 #include "core/mesh.h"
 #include "core/parametrization.h"
+#include "core/quad_mesh.h"
 
 namespace qgp::cli {
 
@@ -14,5 +15,9 @@ namespace qgp::cli {
 void write_obj(const std::string& path, const TriMesh& mesh,
                const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv,
                const std::string& header);
+
+// Writes a quad mesh as Wavefront OBJ (faces counter-clockwise), header as for write_obj.
+// Throws std::runtime_error if the file cannot be written.
+void write_quad_obj(const std::string& path, const QuadMesh& quads, const std::string& header);
 
 }  // namespace qgp::cli

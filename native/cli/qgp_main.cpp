@@ -15,6 +15,7 @@
 #include "intake/read_mesh_file.h"
 #include "mesh_writers.h"
 #include "pipeline/session.h"
+#include "tmesh/tmesh_system.h"
 
 namespace {
 
@@ -135,16 +136,21 @@ int exit_code_for(qgp::ErrorCode code) {
   }
 }
 
-// --uv-out: the repaired input mesh (faces split by the pipeline included) with the seamless
-// map as per-corner texture coordinates, 1 uv unit = the target edge length.
-bool has_seamless_map(const qgp::Session& session) {
-  bool complete = session.intake() != nullptr && !session.components().empty();
-  for (const auto& c : session.components()) complete = complete && c.seamless.has_value();
-  return complete;
+// --uv-out: the repaired input mesh (faces split by the pipeline included) with per-corner
+// texture coordinates: the integer-grid map (1 unit = 1 quad) when every component has one,
+// else the continuous seamless map (1 unit = the target edge length).
+enum class UvMap { None, Seamless, IntegerGrid };
+UvMap available_uv_map(const qgp::Session& session) {
+  if (session.intake() == nullptr || session.components().empty()) return UvMap::None;
+  bool igm = true, seamless = true;
+  for (const auto& c : session.components()) {
+    igm = igm && c.igm.has_value();
+    seamless = seamless && c.seamless.has_value();
+  }
+  return igm ? UvMap::IntegerGrid : seamless ? UvMap::Seamless : UvMap::None;
 }
 
-// Returns false (after a message) if the file cannot be written.
-bool write_uv_output(const std::string& path, const qgp::Session& session) {
+void write_uv_output(const std::string& path, const qgp::Session& session, UvMap map) {
   const auto& components = session.components();
   const qgp::IntakeResult* intake = session.intake();
   // Intake vertices keep their indices; vertices the pipeline added (split centroids) follow.
@@ -168,19 +174,69 @@ bool write_uv_output(const std::string& path, const qgp::Session& session) {
     for (int f = 0; f < c.mesh.num_faces(); ++f, ++face)
       for (int k = 0; k < 3; ++k) {
         out.F(face, k) = id[c.mesh.F(f, k)];
-        uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);
+        if (map == UvMap::IntegerGrid)
+          for (int a = 0; a < 2; ++a) uv(3 * face + k, a) = c.igm->to_double(c.igm->uv[3 * f + k][a]);
+        else
+          uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);
       }
   }
   std::ostringstream header;
-  header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
-         << session.target_edge_length() << " model units";
-  try {
-    qgp::cli::write_obj(path, out, &uv, header.str());
-  } catch (const std::exception& e) {
-    std::cerr << "qgp: " << e.what() << "\n";
-    return false;
+  if (map == UvMap::IntegerGrid)
+    header << "qgp integer-grid map: per-corner vt, 1 uv unit = 1 quad";
+  else
+    header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
+           << components[0].seamless_edge_length << " model units";
+  qgp::cli::write_obj(path, out, &uv, header.str());
+}
+
+// --layout-out: the T-mesh (motorcycle graph) of every component as OBJ polylines.
+bool has_layout(const qgp::Session& session) {
+  bool complete = !session.components().empty();
+  for (const auto& c : session.components()) complete = complete && c.tmesh.has_value();
+  return complete;
+}
+
+void write_layout_output(const std::string& path, const qgp::Session& session) {
+  std::vector<const qgp::TriMesh*> meshes;
+  std::vector<const qgp::TMesh*> tmeshes;
+  for (const auto& c : session.components()) {
+    meshes.push_back(&c.mesh);
+    tmeshes.push_back(&*c.tmesh);
   }
-  return true;
+  qgp::write_layout_obj(path, meshes, tmeshes);
+}
+
+// Writes whatever the session has for the optional outputs; false if a requested one could not be
+// written (with a message).
+bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session) {
+  bool ok = true;
+  auto attempt = [&](const std::string& path, const char* what, bool available, auto write) {
+    if (path.empty()) return;
+    if (!available) {
+      std::cerr << "qgp: no " << what << " was computed; '" << path << "' not written\n";
+      ok = false;
+      return;
+    }
+    try {
+      write();
+    } catch (const std::exception& e) {
+      std::cerr << "qgp: " << e.what() << "\n";
+      ok = false;
+    }
+  };
+  const UvMap map = session ? available_uv_map(*session) : UvMap::None;
+  attempt(cl.uv_out, "parametrization", map != UvMap::None, [&] { write_uv_output(cl.uv_out, *session, map); });
+  attempt(cl.layout_out, "T-mesh layout", session && has_layout(*session),
+          [&] { write_layout_output(cl.layout_out, *session); });
+  return ok;
+}
+
+void print_remesh_summary(const qgp::Json& report) {
+  if (!report.contains("quad")) return;
+  const qgp::Json& q = report["quad"];
+  std::cout << "quads " << q.value("faces", 0) << ", vertices " << q.value("vertices", 0) << ", irregular vertices "
+            << q.value("irregular_vertices", 0) << ", min scaled Jacobian " << q.value("min_scaled_jacobian", 0.0)
+            << ", " << report["timings_s"].value("total", 0.0) << " s\n";
 }
 
 int run(const CommandLine& cl) {
@@ -200,21 +256,30 @@ int run(const CommandLine& cl) {
     report["error"] = {{"code", qgp::error_code_name(e.code())}, {"message", e.what()}};
     report["file"] = cl.input;
     if (cl.command == "info") print_intake_summary(report);
-    // The seamless map exists even while later stages are not built: --uv-out still gets it.
-    bool uv_written = true;
-    if (!cl.uv_out.empty()) {
-      if (session && has_seamless_map(*session)) uv_written = write_uv_output(cl.uv_out, *session);
-      else std::cerr << "qgp: no seamless map was computed; '" << cl.uv_out << "' not written\n";
-    }
+    // Earlier stages' results (seamless map, T-mesh) are still written for inspection.
+    const bool written = write_optional_outputs(cl, session.get());
     write_report(cl.report, report);
     std::cerr << "qgp: " << e.what() << "\n";
-    return uv_written ? exit_code_for(e.code()) : 1;
+    return written ? exit_code_for(e.code()) : 1;
   }
   report["file"] = cl.input;
-  if (cl.command == "info") print_intake_summary(report);
-  const bool uv_written = cl.uv_out.empty() || !has_seamless_map(*session) || write_uv_output(cl.uv_out, *session);
+  bool written = true;
+  if (cl.command == "info") {
+    print_intake_summary(report);
+  } else {
+    try {
+      std::ostringstream header;
+      header << "qgp quad mesh of " << cl.input;
+      qgp::cli::write_quad_obj(cl.output, *session->quad_result(), header.str());
+    } catch (const std::exception& e) {
+      std::cerr << "qgp: " << e.what() << "\n";
+      written = false;
+    }
+    print_remesh_summary(report);
+  }
+  written = write_optional_outputs(cl, session.get()) && written;
   write_report(cl.report, report);
-  return uv_written ? 0 : 1;
+  return written ? 0 : 1;
 }
 
 }  // namespace

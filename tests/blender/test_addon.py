@@ -137,6 +137,126 @@ def test_cancel_leaves_scene_unchanged(binding):
     print("cancel: scene unchanged")
 
 
+def euler_characteristic(mesh):
+    return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
+
+
+def test_quad_remesh(binding):
+    """Suzanne (subdivided, triangulated by Blender) and an imported mesh with edges marked sharp:
+    a new all-quad object next to an untouched source."""
+    reset_scene()
+    bpy.ops.mesh.primitive_monkey_add()
+    monkey = bpy.context.active_object
+    monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
+    bpy.ops.object.modifier_apply(modifier="subsurf")
+    cases = [(monkey, 1200, False)]
+    bpy.ops.mesh.primitive_torus_add()
+    cases.append((bpy.context.active_object, 600, False))
+    cases.append((import_mesh(binding, "camelhead.off"), 1000, False))
+    fandisk = import_mesh(binding, "fandisk.obj")
+    # Mark the dihedral-sharp edges as a user would (Select Sharp Edges, Mark Sharp).
+    bpy.context.view_layer.objects.active = fandisk
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    bpy.ops.mesh.edges_select_sharp(sharpness=math.radians(40))
+    bpy.ops.mesh.mark_sharp()
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert sum(e.use_edge_sharp for e in fandisk.data.edges) > 500
+    cases.append((fandisk, 1500, True))
+    for source, target, sharp in cases:
+        for other in bpy.context.selected_objects:
+            other.select_set(False)
+        source.select_set(True)
+        bpy.context.view_layer.objects.active = source
+        before_source = [e for e in scene_state()[0] if e[0] == source.name]
+        names = {o.name for o in bpy.data.objects}
+        result = bpy.ops.object.qgp_quad_remesh(target_faces=target, use_marked_sharp=sharp)
+        assert result == {"FINISHED"}, result
+        created = [o for o in bpy.data.objects if o.name not in names]
+        assert len(created) == 1, created
+        quad = created[0]
+        assert [e for e in scene_state()[0] if e[0] == source.name][0][3:] == before_source[0][3:], "source changed"
+        sizes = {len(p.vertices) for p in quad.data.polygons}
+        assert sizes == {4}, f"not all quads: {sizes}"
+        n = len(quad.data.polygons)
+        assert 0.7 * target < n < 1.3 * target, (source.name, n, target)
+        assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
+            euler_characteristic(quad.data), euler_characteristic(source.data))
+        assert quad.matrix_world == source.matrix_world
+        print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept")
+
+
+def grid_seam_residual(mesh, layer, quads_per_unit):
+    """Largest deviation, over all edges shared by two polygons, of the UV transition from a
+    90-degree rotation plus an integer translation (in grid units): 0 for an integer-grid map."""
+    uv = [(d.uv[0] * quads_per_unit, d.uv[1] * quads_per_unit) for d in layer.data]
+    sides = {}
+    for poly in mesh.polygons:
+        loops = list(poly.loop_indices)
+        for i, li in enumerate(loops):
+            lj = loops[(i + 1) % len(loops)]
+            a, b = mesh.loops[li].vertex_index, mesh.loops[lj].vertex_index
+            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
+    rotate = lambda p, r: p if r == 0 else rotate((-p[1], p[0]), r - 1)
+    worst = 0.0
+    for (a, b), pair in sides.items():
+        if len(pair) != 2:
+            continue
+        p, q = pair
+        d = (p[b][0] - p[a][0], p[b][1] - p[a][1])
+        e = (q[b][0] - q[a][0], q[b][1] - q[a][1])
+        best = math.inf
+        for r in range(4):
+            rd = rotate(d, r)
+            if abs(rd[0] - e[0]) + abs(rd[1] - e[1]) > 1e-3:
+                continue
+            ra = rotate(p[a], r)
+            t = (q[a][0] - ra[0], q[a][1] - ra[1])
+            best = min(best, abs(t[0] - round(t[0])) + abs(t[1] - round(t[1])))
+        worst = max(worst, best)
+    return worst
+
+
+def test_grid_uv(binding):
+    reset_scene()
+    bpy.ops.mesh.primitive_monkey_add()
+    monkey = bpy.context.active_object  # quads and triangles
+    cases = [(monkey, 500, 4.0), (import_mesh(binding, "bunny.off"), 800, 1.0)]
+    for obj, target, per_unit in cases:
+        for other in bpy.context.selected_objects:
+            other.select_set(False)
+        obj.select_set(True)
+        bpy.context.view_layer.objects.active = obj
+        vertices_before = [tuple(v.co) for v in obj.data.vertices]
+        result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit)
+        assert result == {"FINISHED"}, result
+        layer = obj.data.uv_layers.get("QGP Grid")
+        assert layer is not None, [l.name for l in obj.data.uv_layers]
+        uv = [tuple(d.uv) for d in layer.data]
+        assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
+        assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
+        assert [tuple(v.co) for v in obj.data.vertices] == vertices_before, "geometry changed"
+        seams = sum(e.use_seam for e in obj.data.edges)
+        assert seams > 0
+        # Float32 UVs: the residual is at the level of float precision, not of the grid.
+        residual = grid_seam_residual(obj.data, layer, per_unit)
+        assert residual < 1e-3, residual
+        print(f"{obj.name}: grid UVs on {len(uv)} loops, {seams} seams, transition residual {residual:.2e}")
+
+
+def test_undo_restores_scene():
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add()
+    bpy.ops.ed.undo_push(message="before remesh")
+    before = scene_state()
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=400) == {"FINISHED"}
+    bpy.ops.ed.undo_push(message="after remesh")
+    assert scene_state() != before
+    bpy.ops.ed.undo()
+    assert scene_state() == before, "undo did not restore the scene"
+    print("undo: scene restored")
+
+
 def test_batch():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     inputs = [os.path.join(MESHES, n) for n in ("truck.obj", "cycloidal.ply")]
@@ -152,6 +272,23 @@ def test_batch():
     print("batch: failures recorded, continued past them")
 
 
+def test_batch_success():
+    out = tempfile.mkdtemp(prefix="qgp_batch_")
+    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "spot.obj")]
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
+                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "400", "--uv"],
+                          capture_output=True, text=True)
+    report = json.load(open(os.path.join(out, "report.json")))
+    status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
+    assert status == {"torus.obj": "ok", "truck.obj": "error", "spot.obj": "ok"}, (status, proc.stderr[-2000:])
+    for name in ("torus", "spot"):
+        path = os.path.join(out, name + ".obj")
+        faces = [l for l in open(path) if l.startswith("f ")]
+        assert faces and all(len(l.split()) == 5 for l in faces), path
+        assert os.path.exists(os.path.join(out, name + "_uv.obj"))
+    print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
+
+
 def main():
     addon = install_addon()
     from importlib import import_module
@@ -160,7 +297,11 @@ def main():
     test_registration()
     test_broken_inputs(binding)
     test_cancel_leaves_scene_unchanged(binding)
+    test_quad_remesh(binding)
+    test_grid_uv(binding)
+    test_undo_restores_scene()
     test_batch()
+    test_batch_success()
     print("add-on test: OK")
 
 

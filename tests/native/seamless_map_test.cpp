@@ -13,7 +13,6 @@
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
 #include "intake/read_mesh_file.h"
-#include "pipeline/session.h"
 #include "pipeline/split_faces.h"
 #include "seamless_map/linear_elimination.h"
 #include "seamless_map/orientation.h"
@@ -563,52 +562,6 @@ TEST(SeamlessMapMeshes, FeatureEdgesLieOnIsolines) {
     EXPECT_EQ(m.stats.degenerate_triangles, 0);
     EXPECT_LE(m.stats.max_transition_residual, 1e-9 * diag);
   }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Session: report, timings, rescaling when only the density changes.
-
-TEST(SeamlessSession, ReportsTheMapAndRescalesOnDensityChange) {
-  Session session(read_mesh_file(test::mesh_path("spot.obj")));
-  int seamless_updates = 0;
-  Progress progress(
-      [&](const std::string& stage, double fraction) {
-        if (stage == "seamless_map" && fraction > 0) ++seamless_updates;
-      },
-      nullptr);
-  try {
-    session.run(Job::Remesh, progress);
-    FAIL() << "the remesh job should stop at the T-mesh stage";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::NotBuilt);
-    EXPECT_NE(std::string(e.what()).find("tmesh"), std::string::npos);
-  }
-  const Json& report = session.report();
-  ASSERT_TRUE(report.contains("seamless"));
-  for (const char* key : {"flipped_triangles", "degenerate_triangles", "max_transition_residual", "energy", "ipopt_iterations"})
-    EXPECT_TRUE(report["seamless"].contains(key)) << key;
-  EXPECT_EQ(report["seamless"]["flipped_triangles"], 0);
-  EXPECT_TRUE(report["timings_s"].contains("seamless_map"));
-  EXPECT_GT(seamless_updates, 0);
-  const ComponentState& c = session.components()[0];
-  ASSERT_TRUE(c.seamless.has_value());
-  const Parametrization before = c.seamless->param;
-  const double length_before = c.seamless_edge_length;
-  EXPECT_DOUBLE_EQ(length_before, session.target_edge_length());
-
-  RemeshOptions options = session.options();
-  options.target_faces = 500;
-  session.set_options(options);
-  seamless_updates = 0;
-  EXPECT_THROW(session.run(Job::Remesh, progress), Error);
-  EXPECT_EQ(seamless_updates, 0);  // not recomputed, only rescaled
-  const ComponentState& d = session.components()[0];
-  const double ratio = length_before / d.seamless_edge_length;
-  EXPECT_NEAR(ratio, 0.5, 1e-12);  // 4x fewer quads: twice the edge length -> half the uv size
-  double worst = 0;
-  for (int i = 0; i < before.uv.rows(); ++i) worst = std::max(worst, (d.seamless->param.uv.row(i) - ratio * before.uv.row(i)).norm());
-  EXPECT_EQ(worst, 0.0);
-  EXPECT_LE(d.seamless->stats.max_transition_residual, 1e-9 * param_diagonal(d.seamless->param));
 }
 
 }  // namespace

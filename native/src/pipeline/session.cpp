@@ -2,9 +2,17 @@
 
 #include <cmath>
 
+#include <limits>
+#include <set>
+
 #include "core/error.h"
+#include "core/sanitize_isolines.h"
 #include "core/timer.h"
 #include "pipeline/split_faces.h"
+#include "quad_extraction/quad_metrics.h"
+#include "quantization/round_quantization.h"
+#include "tmesh/tmesh_system.h"
+#include "tmesh/trace_tmesh.h"
 
 namespace qgp {
 
@@ -183,14 +191,35 @@ void Session::run_field_stages(Progress& progress) {
 }
 
 void Session::run_remesh_stages(Job job, Progress& progress) {
-  (void)job;
   prepare_components();
   report_component_preparation();
   run_field_stages(progress);
   run_seamless_stage(progress);
-  progress.begin_stage("tmesh");
-  throw Error(ErrorCode::NotBuilt, "stage 'tmesh' is not built yet; no output was written");
+  run_tmesh_stage(progress);
+  run_quantization_stage(progress);
+  run_igm_stage(progress);
+  if (job == Job::Remesh) run_quad_stage(progress);
+  collect_results(job, progress);
 }
+
+void Session::set_component_range(size_t c, Progress& progress) const {
+  double faces = 0, before = 0;
+  for (size_t i = 0; i < components_.size(); ++i) {
+    if (i < c) before += components_[i].mesh.num_faces();
+    faces += components_[i].mesh.num_faces();
+  }
+  progress.set_range(before / faces, (before + components_[c].mesh.num_faces()) / faces);
+}
+
+namespace {
+
+// Prefixes a stage failure with the component it happened in (when there are several).
+[[noreturn]] void rethrow_for_component(const Error& e, size_t c, size_t count) {
+  if (count <= 1 || e.code() == ErrorCode::Cancelled) throw e;
+  throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
+}
+
+}  // namespace
 
 void Session::run_seamless_stage(Progress& progress) {
   Timer timer;
@@ -201,20 +230,14 @@ void Session::run_seamless_stage(Progress& progress) {
   for (ComponentState& state : components_) {
     progress.set_range(done / faces, (done + state.mesh.num_faces()) / faces);
     done += state.mesh.num_faces();
-    if (state.seamless && state.seamless_edge_length != edge_length) {
-      // Only the density changed: the map scales with 1 / edge length.
-      const double s = state.seamless_edge_length / edge_length;
-      state.seamless->param.uv *= s;
-      state.seamless->stats.max_transition_residual =
-          max_transition_residual(state.mesh, state.seamless->param);
-      state.seamless->stats.energy *= s * s;
-      state.seamless_edge_length = edge_length;
-    }
-    if (state.seamless) continue;
+    if (state.seamless) continue;  // a new density only rescales the quantization
     SeamlessMapOptions options;
     options.edge_length = edge_length;
     state.seamless = compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress);
     state.seamless_edge_length = edge_length;
+    state.exact_seamless.reset();
+    state.tmesh.reset();
+    state.quantization.reset();
   }
   report_["timings_s"]["seamless_map"] = timer.seconds();
 
@@ -244,11 +267,219 @@ void Session::run_seamless_stage(Progress& progress) {
                          {"max_transition_residual", residual},
                          {"energy", energy},
                          {"ipopt_iterations", iterations},
-                         {"edge_length", edge_length},
+                         {"edge_length", components_.empty() ? edge_length : components_[0].seamless_edge_length},
                          {"components", std::move(per_component)}};
   if (flipped + degenerate > 0)
     report_["seamless"]["warnings"].push_back(std::to_string(flipped) + " flipped and " + std::to_string(degenerate) +
                                               " degenerate triangle(s) remain in the seamless map");
+}
+
+
+void Session::run_tmesh_stage(Progress& progress) {
+  Timer timer;
+  progress.begin_stage("tmesh");
+  Json per_component = Json::array();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    set_component_range(c, progress);
+    if (!state.tmesh) {
+      state.quantization.reset();
+      // Feature edges the seamless map left free (their isolines would collapse a triangle) are
+      // not walls of the T-mesh.
+      state.isoline_edges = state.feature_edges;
+      for (int e : select_isolines(state.mesh, *state.field, *state.cut).dropped) state.isoline_edges[e] = 0;
+      try {
+        const SanitizeResult exact = sanitize_with_isolines(
+            state.mesh, state.seamless->param,
+            isoline_constraints(state.mesh, state.seamless->param, state.isoline_edges, true), SanitizeOptions{});
+        if (exact.unresolved_equations > 0)
+          throw Error(ErrorCode::StageFailed, "T-mesh: " + std::to_string(exact.unresolved_equations) +
+                                                  " transition or isoline equation(s) of the seamless map cannot hold exactly");
+        TraceOptions trace_options;
+        trace_options.feature_edges = state.isoline_edges;
+        state.tmesh = trace_tmesh(state.mesh, exact.param, trace_options, progress);
+        state.exact_seamless = std::move(exact.param);
+      } catch (const Error& e) {
+        rethrow_for_component(e, c, components_.size());
+      }
+    }
+    per_component.push_back(tmesh_report(*state.tmesh));
+  }
+  report_["timings_s"]["tmesh"] = timer.seconds();
+  Json total = {{"nodes", 0}, {"edges", 0}, {"cells", 0}, {"singular_nodes", 0}};
+  for (const Json& r : per_component)
+    for (auto& [key, value] : total.items()) value = value.get<int64_t>() + r.value(key, int64_t(0));
+  total["components"] = std::move(per_component);
+  report_["tmesh"] = std::move(total);
+}
+
+void Session::run_quantization_stage(Progress& progress) {
+  Timer timer;
+  progress.begin_stage("quantization");
+  const double edge_length = target_edge_length();
+  Json per_component = Json::array();
+  int64_t quads = 0;
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    set_component_range(c, progress);
+    const double scale = state.seamless_edge_length / edge_length;
+    if (state.quantization && (state.quantization_scale != scale || state.quantizer != options_.quantizer))
+      state.quantization.reset();
+    if (!state.quantization) {
+      state.igm.reset();
+      state.quads.reset();
+      QuantizationOptions options;
+      options.scale = scale;
+      try {
+        if (options_.quantizer == Quantizer::Greedy) {
+          state.quantization = quantize(*state.tmesh, options, progress);
+        } else {
+          // The rounding baseline: its rounded map is the integer-grid map (when it is valid).
+          options.method = QuantizationMethod::Round;
+          const TraceFunction trace = [&state](const ExactParametrization& param, Progress& p) {
+            TraceOptions trace_options;
+            trace_options.feature_edges = state.isoline_edges;
+            return trace_tmesh(state.mesh, param, trace_options, p);
+          };
+          RoundingResult rounded = quantize_by_rounding(state.mesh, state.seamless->param, state.isoline_edges,
+                                                        *state.tmesh, options, trace, progress);
+          if (!rounded.quantization.valid)
+            throw Error(ErrorCode::StageFailed, "quantization (round): " + rounded.quantization.invalid_reason);
+          state.quantization = std::move(rounded.quantization);
+          state.igm = std::move(rounded.map.param);
+          state.igm_stats = IgmStats{};
+          state.igm_stats.path = "round";
+          state.igm_stats.flipped_triangles = rounded.map.flipped_triangles;
+          state.igm_stats.degenerate_triangles = rounded.map.degenerate_triangles;
+          state.igm_stats.unresolved_equations = rounded.map.unresolved_equations;
+        }
+      } catch (const Error& e) {
+        rethrow_for_component(e, c, components_.size());
+      }
+      state.quantization_scale = scale;
+      state.quantizer = options_.quantizer;
+    }
+    quads += state.quantization->quads_expected;
+    per_component.push_back(quantization_report(*state.quantization));
+  }
+  report_["timings_s"]["quantization"] = timer.seconds();
+  report_["quantization"] = {{"method", quantizer_name(options_.quantizer)},
+                             {"quads_expected", quads},
+                             {"components", std::move(per_component)}};
+}
+
+void Session::run_igm_stage(Progress& progress) {
+  Timer timer;
+  progress.begin_stage("igm");
+  Json per_component = Json::array();
+  int flipped = 0, degenerate = 0, fallbacks = 0;
+  double residual = 0;
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    set_component_range(c, progress);
+    if (!state.igm) {
+      state.quads.reset();
+      IgmOptions options;
+      options.edge_length = state.seamless_edge_length;
+      try {
+        IntegerGridMap map = compute_integer_grid_map(state.mesh, *state.field, *state.cut, *state.seamless,
+                                                      *state.exact_seamless, *state.tmesh, *state.quantization,
+                                                      options, progress);
+        state.igm_stats = map.stats;
+        state.igm = std::move(map.param);
+      } catch (const Error& e) {
+        rethrow_for_component(e, c, components_.size());
+      }
+    }
+    const IgmStats& s = state.igm_stats;
+    flipped += s.flipped_triangles;
+    degenerate += s.degenerate_triangles;
+    fallbacks += s.fallback_used;
+    residual = std::max(residual, s.max_integer_residual);
+    per_component.push_back(igm_report(s));
+  }
+  report_["timings_s"]["igm"] = timer.seconds();
+  report_["igm"] = {{"flipped_triangles", flipped},
+                    {"degenerate_triangles", degenerate},
+                    {"max_integer_residual", residual},
+                    {"fallback_used", fallbacks > 0},
+                    {"components", std::move(per_component)}};
+}
+
+void Session::run_quad_stage(Progress& progress) {
+  Timer timer;
+  progress.begin_stage("quad_extraction");
+  Json per_component = Json::array();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    set_component_range(c, progress);
+    if (!state.quads) {
+      try {
+        state.quads = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
+      } catch (const Error& e) {
+        rethrow_for_component(e, c, components_.size());
+      }
+    }
+    per_component.push_back(quad_extraction_stats_json(state.quads->stats));
+  }
+  report_["timings_s"]["quad_extraction"] = timer.seconds();
+  report_["extraction"] = {{"components", std::move(per_component)}};
+}
+
+void Session::collect_results(Job job, Progress& progress) {
+  const TriMesh& intake_mesh = intake_->mesh;
+  // Per-corner integer-grid UVs of the input triangles: corners are matched by input vertex (faces
+  // split by the pipeline share their corners with the input triangle).
+  corner_uv_.assign(static_cast<size_t>(input_.num_faces()) * 6, std::numeric_limits<double>::quiet_NaN());
+  std::set<std::array<int, 2>> cuts;
+  for (const ComponentState& state : components_) {
+    const ExactParametrization& igm = *state.igm;
+    auto input_vertex = [&](int v) {
+      const int iv = state.vertex_map[v];
+      return iv < 0 ? -1 : intake_->input_vertex[iv];
+    };
+    for (int f = 0; f < state.mesh.num_faces(); ++f) {
+      const int input_face = intake_->input_face[state.face_map[f]];
+      if (input_.face_size(input_face) != 3) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int iv = input_vertex(state.mesh.F(f, k));
+        for (int j = 0; j < 3; ++j)
+          if (iv >= 0 && input_.face_vertices[input_.face_start[input_face] + j] == iv) {
+            corner_uv_[6 * input_face + 2 * j] = igm.to_double(igm.uv[3 * f + k][0]);
+            corner_uv_[6 * input_face + 2 * j + 1] = igm.to_double(igm.uv[3 * f + k][1]);
+          }
+      }
+    }
+    // Seams: interior edges whose two sides disagree in the map.
+    for (int e = 0; e < state.mesh.num_edges(); ++e) {
+      const int h = state.mesh.edge_halfedge[e], o = state.mesh.opposite[h];
+      if (o < 0) continue;
+      const int a = state.mesh.F(h / 3, h % 3), b = state.mesh.F(h / 3, (h + 1) % 3);
+      const bool same = igm.uv[h] == igm.uv[3 * (o / 3) + (o + 1) % 3] &&
+                        igm.uv[3 * (h / 3) + (h + 1) % 3] == igm.uv[o];
+      const int ia = input_vertex(a), ib = input_vertex(b);
+      if (!same && ia >= 0 && ib >= 0) cuts.insert({std::min(ia, ib), std::max(ia, ib)});
+    }
+  }
+  cut_edges_.assign(cuts.begin(), cuts.end());
+  if (job != Job::Remesh) return;
+
+  Timer timer;
+  progress.begin_stage("metrics");
+  quads_ = std::make_unique<QuadMesh>();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    const ComponentState& state = components_[c];
+    append_quad_mesh(*quads_, state.quads->quads, static_cast<int>(c));
+    for (int q = 0; q < state.quads->quads.num_quads(); ++q) {
+      const int f = state.quads->quads.quad_face.empty() ? -1 : state.quads->quads.quad_face[q];
+      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[state.face_map[f]]);
+    }
+  }
+  QuadMetricsOptions metric_options;
+  metric_options.hausdorff_samples = 20000;
+  const QuadMetrics metrics = compute_quad_metrics(*quads_, intake_mesh, metric_options, progress);
+  report_["quad"] = quad_report_json(metrics);
+  report_["timings_s"]["metrics"] = timer.seconds();
 }
 
 }  // namespace qgp

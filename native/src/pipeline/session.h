@@ -10,10 +10,14 @@
 #include "core/quad_mesh.h"
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
+#include "igm/integer_grid_map.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
+#include "quad_extraction/quad_extraction.h"
+#include "quantization/quantization.h"
 #include "seamless_map/seamless_map.h"
+#include "tmesh/tmesh.h"
 
 namespace qgp {
 
@@ -27,8 +31,20 @@ struct ComponentState {
   std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
   std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
   std::optional<CutGraph> cut;      // stage 1b
-  std::optional<SeamlessMap> seamless;  // stage 1c, for seamless_edge_length; a new target edge
-  double seamless_edge_length = 0;      // length rescales it (the map is scale-equivariant)
+  std::optional<SeamlessMap> seamless;  // stage 1c: 1 uv unit = seamless_edge_length; computed
+  double seamless_edge_length = 0;      // once, a new density only changes the quantization scale
+  // Stage 2: the seamless map made exact (features and boundary on exact isolines) and its T-mesh.
+  std::vector<char> isoline_edges;      // #E: feature and boundary edges kept as isolines
+  std::optional<ExactParametrization> exact_seamless;
+  std::optional<TMesh> tmesh;
+  // Stage 3: integer T-edge lengths for quantization_scale (quads per seamless uv unit).
+  std::optional<QuantizationResult> quantization;
+  double quantization_scale = 0;
+  Quantizer quantizer = Quantizer::Greedy;
+  // Stage 4: the integer-grid map (1 unit = 1 quad) and stage 5: its quads.
+  std::optional<ExactParametrization> igm;
+  IgmStats igm_stats;                   // of the greedy path (path "round" for the baseline)
+  std::optional<QuadExtraction> quads;
 };
 
 class Session {
@@ -68,6 +84,13 @@ class Session {
   void run_remesh_stages(Job job, Progress& progress);
   void run_field_stages(Progress& progress);
   void run_seamless_stage(Progress& progress);
+  void run_tmesh_stage(Progress& progress);
+  void run_quantization_stage(Progress& progress);
+  void run_igm_stage(Progress& progress);
+  void run_quad_stage(Progress& progress);
+  void collect_results(Job job, Progress& progress);
+  // Calls progress.set_range for component c's share (by face count) of the current stage.
+  void set_component_range(size_t c, Progress& progress) const;
 
   PolygonSoup input_;
   RemeshOptions options_;

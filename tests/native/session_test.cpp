@@ -1,0 +1,297 @@
+// The whole pipeline through the Session: quad meshes and integer-grid UVs of real meshes, the
+// report, density-only re-quantization, cancel in every stage, and the invariants of the output
+// (closed 2-manifold pure-quad mesh with the input's topology, consistent orientation, faithful
+// to the surface, feature curves kept).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <set>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "intake/read_mesh_file.h"
+#include "pipeline/session.h"
+#include "quad_extraction/polygon_metrics.h"
+#include "test_support.h"
+
+namespace qgp {
+namespace {
+
+PolygonSoup soup_of(const QuadMesh& quads) {
+  PolygonSoup soup;
+  for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());
+  for (int q = 0; q < quads.num_quads(); ++q) soup.add_face(quads.Q.row(q).data(), 4);
+  return soup;
+}
+
+// Invariants of a successful remesh job's output; returns the measurements.
+PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& session, double sharp_angle) {
+  const QuadMesh* quads = session.quad_result();
+  EXPECT_NE(quads, nullptr) << name;
+  if (!quads) return {};
+  const Json& report = session.report();
+  EXPECT_EQ(report["status"], "ok") << name;
+  // Exactly the quads the quantization promised, over all components.
+  EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>()) << name;
+  EXPECT_EQ(session.quad_source_face().size(), static_cast<size_t>(quads->num_quads())) << name;
+  for (int f : session.quad_source_face()) {
+    EXPECT_GE(f, 0) << name;
+    EXPECT_LT(f, session.input().num_faces()) << name;
+  }
+  Progress progress;
+  const PolygonMeshMetrics m = measure_polygon_mesh(soup_of(*quads), session.intake()->mesh, sharp_angle, progress);
+  EXPECT_EQ(m.non_quads, 0) << name;
+  EXPECT_EQ(m.non_manifold_edges, 0) << name;
+  EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << name;
+  EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << name;
+  EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << name;
+  EXPECT_EQ(m.quad.flipped_quads, 0) << name;
+  // Irregular vertices only where the map is singular.
+  const QuadTopology topology = quad_topology(*quads);
+  int irregular_off_singularity = 0;
+  for (int v = 0; v < quads->num_vertices(); ++v) {
+    const bool irregular = topology.on_boundary[v] ? topology.valence[v] != 3 : topology.valence[v] != 4;
+    irregular_off_singularity += irregular && !quads->vertex_singular[v];
+  }
+  EXPECT_EQ(irregular_off_singularity, 0) << name;
+  EXPECT_EQ(report["quad"]["faces"], quads->num_quads()) << name;
+  // Same topology as the input: Euler characteristic and number of boundary loops' presence.
+  EXPECT_EQ(m.euler_characteristic, m.reference_euler_characteristic) << name;
+  const TriMesh& input = session.intake()->mesh;
+  bool input_has_boundary = false;
+  for (int e = 0; e < input.num_edges(); ++e) input_has_boundary = input_has_boundary || input.is_boundary_edge(e);
+  EXPECT_EQ(m.quad.topology.boundary_edges > 0, input_has_boundary) << name;
+  // On the surface: within 5% of the bounding-box diagonal both ways even when coarse (metrics are
+  // relative to it; the sweep asks 1% at 8000 quads).
+  EXPECT_LT(m.quad.hausdorff, 0.05) << name;
+  if (sharp_angle > 0) EXPECT_GT(m.sharp_edge_coverage, 0.95) << name;
+  // Integer-grid UVs for every input triangle intake kept.
+  const std::vector<double>& uv = session.corner_uv();
+  EXPECT_EQ(uv.size(), static_cast<size_t>(session.input().num_faces()) * 6) << name;
+  return m;
+}
+
+constexpr ErrorCode kCompleted = static_cast<ErrorCode>(0);
+ErrorCode run_job(Session& session, Job job, Progress& progress, std::string* message = nullptr) {
+  try {
+    session.run(job, progress);
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.code();
+  }
+  return kCompleted;
+}
+
+struct StageCounter {
+  std::map<std::string, int> updates;
+  Progress progress() {
+    return Progress([this](const std::string& stage, double fraction) { updates[stage] += fraction > 0; }, nullptr);
+  }
+};
+
+TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
+  Session session(read_mesh_file(test::mesh_path("spot.obj")));
+  RemeshOptions options;
+  options.target_faces = 1500;
+  session.set_options(options);
+  StageCounter counter;
+  Progress progress = counter.progress();
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
+  const PolygonMeshMetrics m = expect_valid_output("spot", session, -1);
+  EXPECT_EQ(m.quad.topology.boundary_edges, 0);
+  EXPECT_NEAR(m.quads, 1500, 0.25 * 1500);
+  EXPECT_GT(m.quad.min_scaled_jacobian, 0);
+  const Json& report = session.report();
+  for (const char* key : {"input", "field", "seamless", "tmesh", "quantization", "igm", "extraction", "quad"})
+    EXPECT_TRUE(report.contains(key)) << key;
+  for (const char* stage : {"cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction"}) {
+    EXPECT_TRUE(report["timings_s"].contains(stage)) << stage;
+    EXPECT_GT(counter.updates[stage], 0) << stage;
+  }
+  for (double c : session.corner_uv()) EXPECT_TRUE(std::isfinite(c));
+  EXPECT_GT(session.cut_edges().size(), 0u);
+}
+
+TEST(SessionPipeline, NewDensityOnlyRequantizes) {
+  Session session(read_mesh_file(test::mesh_path("fertility.off")));  // genus 4
+  RemeshOptions options;
+  options.target_faces = 800;
+  session.set_options(options);
+  Progress first;
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, first, &message), kCompleted) << message;
+  const int coarse = session.quad_result()->num_quads();
+  options.target_faces = 3200;
+  session.set_options(options);
+  StageCounter counter;
+  Progress second = counter.progress();
+  ASSERT_EQ(run_job(session, Job::Remesh, second, &message), kCompleted) << message;
+  for (const char* stage : {"cross_field", "cut_graph", "seamless_map", "tmesh"})
+    EXPECT_EQ(counter.updates[stage], 0) << stage << " ran again";
+  EXPECT_GT(counter.updates["quantization"], 0);
+  const PolygonMeshMetrics m = expect_valid_output("fertility", session, -1);
+  EXPECT_EQ(m.euler_characteristic, -6);
+  const double ratio = static_cast<double>(session.quad_result()->num_quads()) / coarse;
+  EXPECT_GT(ratio, 3.0);
+  EXPECT_LT(ratio, 5.3);
+}
+
+TEST(SessionPipeline, GridUvJobGivesIntegerSeamsAndNoQuads) {
+  Session session(read_mesh_file(test::mesh_path("bunny.off")));
+  Progress progress;
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::GridUV, progress, &message), kCompleted) << message;
+  EXPECT_EQ(session.quad_result(), nullptr);
+  const std::vector<double>& uv = session.corner_uv();
+  ASSERT_EQ(uv.size(), static_cast<size_t>(session.input().num_faces()) * 6);
+  // Across every seam the two sides' coordinates differ by a rotation by a multiple of 90 degrees
+  // and an integer translation: corner coordinate differences along each edge agree up to rotation.
+  const PolygonSoup& in = session.input();
+  std::map<std::pair<int, int>, std::pair<int, int>> corner_of;  // (a, b) directed -> (face, k)
+  for (int f = 0; f < in.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      corner_of[{in.face_vertices[3 * f + k], in.face_vertices[3 * f + (k + 1) % 3]}] = {f, k};
+  auto rotate = [](Vec2 p, int r) {
+    for (int i = 0; i < r; ++i) p = Vec2(-p.y(), p.x());
+    return p;
+  };
+  int seams = 0, checked = 0;
+  for (const auto& [ab, fk] : corner_of) {
+    auto it = corner_of.find({ab.second, ab.first});
+    if (it == corner_of.end() || ab.first > ab.second) continue;
+    auto at = [&](int f, int k) { return Vec2(uv[6 * f + 2 * (k % 3)], uv[6 * f + 2 * (k % 3) + 1]); };
+    const auto [f, k] = fk;
+    const auto [g, j] = it->second;
+    // Vertex a is corner k of f and corner j+1 of g; vertex b is corner k+1 of f and corner j of g.
+    const Vec2 pa = at(f, k), pb = at(f, k + 1), qa = at(g, j + 1), qb = at(g, j);
+    int rotation = -1;
+    for (int r = 0; r < 4 && rotation < 0; ++r)
+      if ((rotate(pb - pa, r) - (qb - qa)).norm() < 1e-6) rotation = r;
+    ASSERT_GE(rotation, 0) << "edge " << ab.first << "-" << ab.second << " is not seamless";
+    const Vec2 t = qa - rotate(pa, rotation);
+    EXPECT_LT((t - Vec2(std::round(t.x()), std::round(t.y()))).norm(), 1e-6) << "edge " << ab.first << "-" << ab.second;
+    seams += (pa - qa).norm() + (pb - qb).norm() > 0;
+    ++checked;
+  }
+  EXPECT_GT(checked, 10000);
+  EXPECT_GT(seams, 0);
+  EXPECT_EQ(static_cast<size_t>(seams), session.cut_edges().size());
+}
+
+TEST(SessionPipeline, FandiskKeepsItsSharpEdges) {
+  Session session(read_mesh_file(test::mesh_path("fandisk.obj")));
+  RemeshOptions options;
+  options.sharp_angle_deg = 40;
+  options.target_faces = 2000;
+  session.set_options(options);
+  Progress progress;
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
+  const PolygonMeshMetrics m = expect_valid_output("fandisk", session, 40);
+  EXPECT_GT(m.sharp_edges, 500);
+}
+
+TEST(SessionPipeline, CancelInEveryStageKeepsTheSessionUsable) {
+  Session session(read_mesh_file(test::mesh_path("bunny.off")));
+  for (const char* stage : {"seamless_map", "tmesh", "quantization", "igm", "quad_extraction"}) {
+    std::atomic<bool> cancel{false};
+    Progress progress(
+        [&](const std::string& s, double) {
+          if (s == stage) cancel = true;
+        },
+        &cancel);
+    std::string message;
+    EXPECT_EQ(run_job(session, Job::Remesh, progress, &message), ErrorCode::Cancelled) << stage << ": " << message;
+    EXPECT_EQ(session.quad_result(), nullptr);
+    EXPECT_EQ(session.report()["status"], "error");
+  }
+  Progress progress;
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
+  expect_valid_output("bunny", session, -1);
+}
+
+TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
+  // The naive rounding baseline often flips triangles: then the job fails with the reason.
+  int completed = 0, refused = 0;
+  for (const char* name : {"torus.obj", "spot.obj", "joint.obj"}) {
+    Session session(read_mesh_file(test::mesh_path(name)));
+    RemeshOptions options;
+    options.quantizer = Quantizer::Round;
+    options.target_faces = 600;
+    session.set_options(options);
+    Progress progress;
+    std::string message;
+    const ErrorCode code = run_job(session, Job::Remesh, progress, &message);
+    if (code == kCompleted) {
+      expect_valid_output(name, session, -1);
+      ++completed;
+    } else {
+      EXPECT_EQ(code, ErrorCode::StageFailed) << name << ": " << message;
+      EXPECT_NE(message.find("round"), std::string::npos) << message;
+      ++refused;
+    }
+  }
+  std::cout << "round quantizer: " << completed << " completed, " << refused << " refused\n";
+}
+
+// Every manifold mesh of the shared set at three densities (the slow sweep): one session per mesh,
+// so the seamless map and T-mesh are computed once and re-quantized.
+TEST(SessionMeshes, EveryManifoldMeshBecomesAValidQuadMesh) {
+  std::cout << "mesh | target | quads | irregular | min scaled Jacobian | mean angle dev | Hausdorff | "
+               "field+cut+seamless+tmesh s | quantization s | igm s | extraction s\n";
+  std::vector<std::string> failed;
+  for (const std::string& name : test::manifold_mesh_files()) {
+    Session session(read_mesh_file(test::mesh_path(name)));
+    for (double target : {500.0, 2000.0, 8000.0}) {
+      RemeshOptions options;
+      options.target_faces = target;
+      session.set_options(options);
+      Progress progress;
+      std::string message;
+      const ErrorCode code = run_job(session, Job::Remesh, progress, &message);
+      if (code != kCompleted) {
+        std::cout << name << " | " << target << " | FAILED: " << message << "\n";
+        failed.push_back(name + "@" + std::to_string(static_cast<int>(target)));
+        continue;
+      }
+      const PolygonMeshMetrics m = expect_valid_output(name, session, -1);
+      if (target == 8000) EXPECT_LE(m.quad.hausdorff, 0.01) << name;
+      const Json& t = session.report()["timings_s"];
+      auto sec = [&](const char* k) { return t.value(k, 0.0); };
+      std::cout << name << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices << " | "
+                << m.quad.min_scaled_jacobian << " | " << m.quad.mean_angle_deviation << " | " << m.quad.hausdorff
+                << " | " << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh") << " | "
+                << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << "\n";
+    }
+  }
+  std::string list;
+  for (const std::string& f : failed) list += f + " ";
+  EXPECT_TRUE(failed.empty()) << "failed: " << list;
+}
+
+// CAD meshes with sharp edges at 40 degrees, and meshes with boundaries: feature curves and
+// boundaries become quad edges.
+TEST(SessionMeshes, SharpEdgesAndBoundariesAreQuadEdges) {
+  for (const char* name : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj", "camelhead.off", "face.obj"}) {
+    const bool cad = std::string(name).find(".obj") != std::string::npos && std::string(name) != "face.obj";
+    Session session(read_mesh_file(test::mesh_path(name)));
+    RemeshOptions options;
+    options.target_faces = 2000;
+    options.sharp_angle_deg = cad ? 40 : -1;
+    session.set_options(options);
+    Progress progress;
+    std::string message;
+    ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << name << ": " << message;
+    const PolygonMeshMetrics m = expect_valid_output(name, session, cad ? 40 : -1);
+    std::cout << name << ": " << m.quads << " quads, sharp-edge coverage " << m.sharp_edge_coverage
+              << ", boundary edges " << m.quad.topology.boundary_edges << "\n";
+  }
+}
+
+}  // namespace
+}  // namespace qgp
