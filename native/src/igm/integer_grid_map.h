@@ -7,11 +7,20 @@
 // integer_grid_rows), p_b = τ(p_a) + Σ x_e · d_e in the chart where the path ends. One node (a
 // singular one if any) is fixed at its rounded position, so all of them get integer coordinates.
 //
-// Solve (§7.1): penalty λ‖Cz − b‖² with the seamless-map solver's regularity repair (Ipopt,
-// re-linearized around each result) until ‖Cz − b‖∞ ≤ tolerance, then the hard-constrained
-// solve linearized around the last pose, in which the integer quantities that Cz = b determines
-// (singular/corner positions, cut translations, feature isoline values, rounded from the penalty
-// optimum) are imposed exactly. Then exact sanitization with snapping.
+// Solve (§7.1), in escalating attempts until the exact map has no flipped/degenerate triangle:
+//  1. (default) one equality-only penalty solve λ‖Cz − b‖² (λ = 1e6; it meets ‖Cz − b‖∞ ≤ 1e-4
+//     on every mesh tested), then the hard solve with Ipopt repair of flipped triangles
+//     (tri-sector constraints linearized around the seamless map);
+//  2. the paper's penalty phase: penalty solves with the regularity repair, each re-linearized
+//     around the previous result, until ‖Cz − b‖∞ ≤ 1e-4, then the hard solve around the last pose;
+//  3. fallback: the hard solve with every triangle under tri-sector constraints around the
+//     seamless map (stats.fallback_used). The paper's §7.1.1 per-cell fallback (T-mesh edges
+//     inserted into the mesh, cells mapped onto their integer rectangles) is not implemented.
+// The hard solve imposes the integer quantities that Cz = b determines (singular/corner vertex
+// positions, cut translations, feature/boundary isoline values, rounded from the penalty optimum,
+// which is within 1e-4 of them), exactly: unit coefficients keep the elimination integral (the
+// path rows themselves carry barycentric coefficients). Finally sanitize_with_isolines snaps
+// them to exact integers. stats.path names the attempt that produced the result.
 #pragma once
 #include <string>
 #include <vector>
