@@ -328,10 +328,26 @@ TEST(IgmMeshes, QuickMeshesAtTwoDensities) {
   sweep({"fertility.off", "camelhead.off"}, {2000});
 }
 
-// Every manifold mesh (the large scans take minutes): run with QGP_IGM_ALL_MESHES=1.
+// Every manifold mesh (the large scans take minutes): run with QGP_IGM_ALL_MESHES=1
+// (optionally QGP_IGM_MESHES=name,name to pick some).
 TEST(IgmMeshes, EveryManifoldMeshAtTwoDensities) {
   if (!std::getenv("QGP_IGM_ALL_MESHES")) GTEST_SKIP() << "set QGP_IGM_ALL_MESHES=1 to run every manifold mesh";
-  sweep(test::manifold_mesh_files());
+  // QGP_IGM_MESHES=a.obj,b.off restricts the sweep to those meshes.
+  std::vector<std::string> names = test::manifold_mesh_files();
+  if (const char* list = std::getenv("QGP_IGM_MESHES")) {
+    names.clear();
+    std::string item;
+    for (const char* p = list;; ++p) {
+      if (*p == ',' || *p == 0) {
+        if (!item.empty()) names.push_back(item);
+        item.clear();
+        if (*p == 0) break;
+      } else {
+        item += *p;
+      }
+    }
+  }
+  sweep(names);
 }
 
 // The rows of C z = b hold on the map the T-mesh was traced on when the lengths are its
