@@ -258,6 +258,12 @@ TEST(Igm, MismatchedInputsAreRefused) {
   Chain e = run_chain(test::make_grid_cube(4).mesh, 40, 96, 96);
   e.sanitized.uv.pop_back();
   EXPECT_THROW(run_igm(e), Error);
+  Chain f = run_chain(test::make_grid_cube(4).mesh, 40, 96, 96);
+  f.tmesh.edges[0].to = static_cast<int>(f.tmesh.nodes.size());
+  EXPECT_THROW(run_igm(f), Error);
+  Chain g = run_chain(test::make_grid_cube(4).mesh, 40, 96, 96);
+  g.tmesh.edges[1].trace.back().face = -1;
+  EXPECT_THROW(run_igm(g), Error);
 }
 
 TEST(Igm, CancelStopsWithCancelledError) {

@@ -381,6 +381,19 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   if (!(quantization.scale > 0) || !(options.edge_length > 0))
     throw Error(ErrorCode::InvalidArgument, "integer-grid map: scale and edge length must be positive");
   if (tmesh.nodes.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: empty T-mesh");
+  const int num_nodes = static_cast<int>(tmesh.nodes.size());
+  for (const TMeshNode& n : tmesh.nodes)
+    if (n.point.face < 0 || n.point.face >= nf || n.mesh_vertex >= mesh.num_vertices())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: a T-mesh node lies outside the mesh");
+  for (size_t e = 0; e < tmesh.edges.size(); ++e) {
+    const TMeshEdge& edge = tmesh.edges[e];
+    bool ok = edge.from >= 0 && edge.from < num_nodes && edge.to >= 0 && edge.to < num_nodes && !edge.trace.empty() &&
+              quantization.x[e] >= 0;
+    for (const SurfacePoint& p : edge.trace) ok = ok && p.face >= 0 && p.face < nf;
+    if (!ok) throw Error(ErrorCode::InvalidArgument, "integer-grid map: malformed T-edge " + std::to_string(e));
+  }
+  if (static_cast<int>(seamless.param.is_cut.size()) != ne)
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the seamless map's cut flags do not match the mesh");
   for (int h = 0; h < nc; ++h)
     if (sanitized.rotation[h] != seamless.param.rotation[h])
       throw Error(ErrorCode::InvalidArgument, "integer-grid map: the sanitized and the seamless map have different transitions");
