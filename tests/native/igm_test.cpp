@@ -290,7 +290,7 @@ bool is_cad(const std::string& name) {
 
 // Meshes on which a stage before the integer-grid map fails (the seamless map leaves flipped
 // triangles around a singularity or a feature vertex, which the T-mesh tracer refuses).
-const std::set<std::string> kEarlierStageFailures = {"armadillo.obj", "block.obj"};
+const std::set<std::string> kEarlierStageFailures = {"armadillo.obj", "block.obj", "wingnut.obj"};
 
 void sweep(const std::vector<std::string>& names, const std::vector<int>& targets = {500, 2000}) {
   std::cout << "[igm] mesh | target | tri faces | quads expected | quads | penalty iterations | fallback | "
