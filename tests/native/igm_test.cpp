@@ -379,7 +379,7 @@ TEST(Igm, RowsHoldForContinuousLengthsAndAreConsistentForIntegerOnes) {
     EXPECT_LT(worst, 1e-9);
     ParametrizationProblem problem(c.mesh, c.seamless.param.rotation, c.seamless.param.is_cut, c.cut.frame_u,
                                    c.edge_length / c.quantization.scale);
-    for (const auto& [h, axis] : select_isolines(c.mesh, c.field, c.cut).isolines) problem.add_isoline(h, axis);
+    for (const Isoline& line : select_isolines(c.mesh, c.field, c.cut).isolines) problem.add_isoline(line.halfedge, line.axis);
     std::vector<double> x(c.quantization.x.begin(), c.quantization.x.end());
     for (const IgmRow& r : integer_grid_rows(c.mesh, c.sanitized, c.tmesh, x, root))
       if (!r.terms.empty()) problem.add_linear_constraint(r.terms, r.rhs);

@@ -1,5 +1,8 @@
 #include "test_support.h"
 
+#include <cstdlib>
+#include <sstream>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -32,6 +35,14 @@ std::vector<std::string> accepted_mesh_files() {
 }
 
 std::vector<std::string> manifold_mesh_files() {
+  // QGP_TEST_MESHES=a.obj,b.off restricts the sweeps to those meshes (for investigating one).
+  if (const char* only = std::getenv("QGP_TEST_MESHES")) {
+    std::vector<std::string> names;
+    std::stringstream list(only);
+    for (std::string name; std::getline(list, name, ',');)
+      if (!name.empty()) names.push_back(name);
+    return names;
+  }
   return {"armadillo.obj", "beetle.off",    "block.obj",          "bunny.off",
           "camelhead.off", "decimated-max.obj", "dragon-genus1.obj", "face.obj",
           "fandisk.obj",   "fertility.off", "igea.ply",           "joint.obj",

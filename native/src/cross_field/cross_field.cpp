@@ -363,6 +363,131 @@ int count_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& featur
   return collapsed;
 }
 
+// Sectors around every vertex between consecutive feature/boundary halfedges: first (outgoing)
+// halfedge, closing (incoming) halfedge, the incoming halfedges crossed inside, and quarter turns
+// n = (rho(first) + angles + residual rotations inside - rho(last)) / 90deg (see
+// count_collapsed_sectors).
+struct Sector {
+  int first = -1, last = -1;  // -1: the whole fan of an interior vertex without features
+  std::vector<int> crossed;
+  long turns = 0;
+  // Feature sectors need one quarter turn (exactly one if one face wide). A whole fan needs three
+  // (index <= +1): with none it cannot be mapped without folds, and one or two quarter turns
+  // would squeeze every face around the vertex into 90 or 180 degrees.
+  bool minimum_ok(long n) const { return first < 0 ? n >= 3 : crossed.empty() ? n == 1 : n >= 1; }
+};
+std::vector<Sector> feature_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge,
+                                    const std::vector<double>& eps, const std::vector<double>& rho) {
+  std::vector<Sector> sectors;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const int k = static_cast<int>(fan.size());
+    int start = -1;
+    for (int j = 0; j < k && start < 0; ++j)
+      if (is_feature_halfedge(mesh, feature_edge, fan[j])) start = j;
+    if (start < 0) {
+      if (is_boundary_vertex(mesh, v)) continue;
+      Sector s;
+      double swept = 0;
+      for (int h : fan) {
+        s.crossed.push_back(TriMesh::prev(h));
+        swept += corner_angle(mesh, h) + eps[s.crossed.back()];
+      }
+      s.turns = std::lround(swept / kQuarter);
+      sectors.push_back(std::move(s));
+      continue;
+    }
+    const int end = is_boundary_vertex(mesh, v) ? k : start + k;
+    for (int j0 = start; j0 < end;) {
+      Sector s;
+      int j1 = j0;
+      double swept = rho[fan[j0 % k]] + corner_angle(mesh, fan[j0 % k]);
+      while (!is_feature_halfedge(mesh, feature_edge, TriMesh::prev(fan[j1 % k]))) {
+        s.crossed.push_back(TriMesh::prev(fan[j1 % k]));
+        swept += eps[s.crossed.back()];
+        swept += corner_angle(mesh, fan[++j1 % k]);
+      }
+      s.first = fan[j0 % k];
+      s.last = TriMesh::prev(fan[j1 % k]);
+      s.turns = std::lround((swept - rho[s.last]) / kQuarter);
+      sectors.push_back(std::move(s));
+      j0 = j1 + 1;
+    }
+  }
+  return sectors;
+}
+
+// A sector must map to at least one quarter turn (exactly one when it is one face wide): with
+// fewer, its two edges lie on one isoline through the vertex and the faces between them (often a
+// whole strip between two feature curves) must fold. Nearest-axis choices miss this where the
+// field is a compromise near 45deg to both edges (acute sectors, sliver faces, exact ties).
+// Likewise an interior vertex needs index <= +1 (e.g. the centre of a fan-triangulated disc
+// bounded by a circular feature gets the whole +4 of the disc). A missing quarter turn is moved
+// into the sector from a neighbour, one per pass: across one of its inner edges (the edge's
+// matching changes; its other end becomes a singularity, or its sector there gives up a quarter
+// turn), or through one of its two bounding halfedges (that halfedge's own sector moves to its
+// second nearest axis, within 90deg; the sector at the edge's other end gives up a quarter turn).
+// Of the moves that keep the other sector at its minimum, the one with the smallest new residual
+// / misalignment. Returns the number of moves. shift (3#F, antisymmetric) receives the matching
+// changes of ordinary edges; eps, rho and edge_sector are updated.
+int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge, std::vector<double>& eps,
+                              std::vector<double>& rho, std::vector<int8_t>& edge_sector, std::vector<int>& shift) {
+  const int nh = mesh.num_halfedges();
+  int resolved = 0;
+  shift.assign(nh, 0);
+  for (int pass = 0; pass < 16; ++pass) {
+    const std::vector<Sector> sectors = feature_sectors(mesh, feature_edge, eps, rho);
+    // Per halfedge: the sector it starts (at from(h)), closes (at to(h)) or is crossed in (at to(h)).
+    std::vector<int> starts(nh, -1), closes(nh, -1), crossed_in(nh, -1);
+    for (size_t i = 0; i < sectors.size(); ++i) {
+      if (sectors[i].first >= 0) starts[sectors[i].first] = static_cast<int>(i);
+      if (sectors[i].last >= 0) closes[sectors[i].last] = static_cast<int>(i);
+      for (int h : sectors[i].crossed) crossed_in[h] = static_cast<int>(i);
+    }
+    std::vector<char> touched(nh, 0);
+    bool changed = false;
+    for (const Sector& s : sectors) {
+      if (s.minimum_ok(s.turns)) continue;
+      const long d = s.first >= 0 && s.crossed.empty() && s.turns > 1 ? -1 : 1;  // one quarter turn per pass
+      // kind 0: rho(first) += d; kind 1: rho(last) -= d; kind 2: eps(crossed) += d (quarter turns).
+      struct Move { int kind, h; double deviation; int other; };
+      std::vector<Move> moves;
+      if (s.first >= 0) {
+        moves.push_back({0, s.first, rho[s.first] + d * kQuarter, closes[s.first]});
+        moves.push_back({1, s.last, rho[s.last] - d * kQuarter, starts[s.last]});
+      }
+      for (int h : s.crossed) moves.push_back({2, h, eps[h] + d * kQuarter, crossed_in[mesh.opposite[h]]});
+      int best = -1;
+      for (size_t i = 0; i < moves.size(); ++i) {
+        const Move& m = moves[i];
+        const int o = m.kind == 2 ? mesh.opposite[m.h] : m.h;
+        if (touched[m.h] || touched[o]) continue;
+        if (!(std::abs(m.deviation) < (m.kind == 2 ? M_PI : kQuarter))) continue;
+        if (m.other >= 0 && !sectors[m.other].minimum_ok(sectors[m.other].turns - d)) continue;
+        if (best < 0 || std::abs(m.deviation) < std::abs(moves[best].deviation)) best = static_cast<int>(i);
+      }
+      if (best < 0) continue;
+      const Move& m = moves[best];
+      if (m.kind == 2) {
+        const int o = mesh.opposite[m.h];
+        touched[m.h] = touched[o] = 1;
+        eps[m.h] = m.deviation;
+        eps[o] = -m.deviation;
+        shift[m.h] -= static_cast<int>(d);  // eps = mismatch - q * 90deg
+        shift[o] += static_cast<int>(d);
+      } else {
+        touched[m.h] = 1;
+        rho[m.h] = m.deviation;
+        edge_sector[m.h] = static_cast<int8_t>(mod4(edge_sector[m.h] + (m.kind == 0 ? -d : d)));
+      }
+      changed = true;
+      ++resolved;
+    }
+    if (!changed) break;
+  }
+  return resolved;
+}
+
 }  // namespace
 
 Vec3 rotate_in_face(const TriMesh& mesh, int f, const Vec3& d, int k) {
@@ -459,12 +584,23 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
       field.edge_sector[h] =
           static_cast<int8_t>(mod4(nearest_quarter(wrap_angle(fr.angle[h] - theta[h / 3]), &rho[h])));
 
+  // Residual rotations across ordinary edges (they do not depend on the sectors), then the
+  // sectors that would collapse are repaired.
+  field.matching.assign(nh, 0);
+  std::vector<double> eps(nh, 0.0);
+  for (int e = 0; e < ne; ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0 || field.feature_edge[e]) continue;
+    nearest_quarter(wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]), &eps[h]);
+    eps[o] = -eps[h];
+  }
+  std::vector<int> shift;
+  field.num_resolved_sectors = resolve_collapsed_sectors(mesh, field.feature_edge, eps, rho, field.edge_sector, shift);
+
   // Matchings and the residual rotation eps[h] left after the quarter turns (the edge's chart
   // angle on the far side minus its chart angle here minus matching * 90deg). Ordinary edges:
   // nearest quarter turn, |eps| <= 45deg. Feature edges: the quarter turn that keeps both sides'
   // own sectors, q(o) = q(h) + r + 2, so |eps| = |rho(o) - rho(h)| <= 90deg.
-  field.matching.assign(nh, 0);
-  std::vector<double> eps(nh, 0.0);
   for (int e = 0; e < ne; ++e) {
     const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
     if (o < 0) continue;
@@ -474,7 +610,8 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
       q = field.edge_sector[o] - field.edge_sector[h] - 2;
       eps[h] = wrap_angle(mismatch - q * kQuarter);
     } else {
-      q = nearest_quarter(mismatch, &eps[h]);
+      q = nearest_quarter(mismatch, &eps[h]) + shift[h];
+      eps[h] = mismatch - q * kQuarter;
     }
     eps[o] = -eps[h];
     field.matching[h] = static_cast<int8_t>(mod4(q));

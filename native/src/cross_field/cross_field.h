@@ -75,7 +75,8 @@ struct CrossField {
                                       // isoline sector q: the halfedge vector runs along R^q(+u)
                                       // of face(h)'s chart (q even: the edge runs along u, so v
                                       // is constant on it; q odd: u is constant); the nearest
-                                      // axis in face(h) (off by at most 45deg). Consistent
+                                      // axis in face(h) (off by at most 45deg; up to 90deg
+                                      // where a collapsed sector was resolved). Consistent
                                       // across interior feature edges:
                                       //   q(opposite) = (q(h) + matching[h] + 2) % 4.
                                       // -1 on all other halfedges.
@@ -87,6 +88,11 @@ struct CrossField {
                                       // not to exactly one): the seamless map must degenerate
                                       // there. Only around over-constrained faces on the shared
                                       // meshes (plus 2 on cow.obj at 40deg).
+  int num_resolved_sectors = 0;       // quarter turns moved into sectors that would have
+                                      // collapsed (or interior vertices of index > +1) from a
+                                      // neighbour: one matching (|residual| < 135deg) or one
+                                      // edge_sector (|rho| < 90deg) per move (see
+                                      // resolve_collapsed_sectors in cross_field.cpp)
   int num_singularities = 0;          // vertices with vertex_index != 0
   int index_sum = 0;                  // sum of vertex_index (quarter turns) = 4 * chi
   int euler_characteristic = 0;       // of the mesh

@@ -405,8 +405,12 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   // The problem at the quantization's scale: 1 uv unit = one quad edge.
   ParametrizationProblem problem(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
                                  options.edge_length / scale);
-  const IsolineSelection isolines = select_isolines(mesh, field, cut);
-  for (const auto& [h, axis] : isolines.isolines) problem.add_isoline(h, axis);
+  // The seamless map's isolines (it may have left a few more feature edges free).
+  std::vector<char> left_free(mesh.num_edges(), 0);
+  for (int e : seamless.stats.dropped_isoline_edges)
+    if (e >= 0 && e < mesh.num_edges()) left_free[e] = 1;
+  for (const Isoline& line : select_isolines(mesh, field, cut).isolines)
+    if (!left_free[mesh.edge_of[line.halfedge]]) problem.add_isoline(line.halfedge, line.axis);
 
   // C z = b: paths between singular / corner nodes (tree + loops), and the root at its rounded
   // position (the first singular node on a mesh vertex, else the first node).

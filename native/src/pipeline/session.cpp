@@ -287,7 +287,7 @@ void Session::run_tmesh_stage(Progress& progress) {
       // Feature edges the seamless map left free (their isolines would collapse a triangle) are
       // not walls of the T-mesh.
       state.isoline_edges = state.feature_edges;
-      for (int e : select_isolines(state.mesh, *state.field, *state.cut).dropped) state.isoline_edges[e] = 0;
+      for (int e : state.seamless->stats.dropped_isoline_edges) state.isoline_edges[e] = 0;
       try {
         const SanitizeResult exact = sanitize_with_isolines(
             state.mesh, state.seamless->param,

@@ -193,13 +193,18 @@ ParametrizationProblem::System& ParametrizationProblem::system(ConstraintMode mo
   const int num_vars = 2 * nw + 2 * static_cast<int>(cut_halfedges_.size());
   auto wedge_var = [&](int corner, int axis) { return 2 * wedge_of_[corner] + axis; };
 
-  // Exact elimination of the hard constraints. Wedges are preferred as pivots, so that the
-  // second side of a cut arc becomes R * first side + the arc's translation.
+  // Exact elimination of the hard constraints. Translations are preferred as pivots, then
+  // wedges: an arc's translation becomes the difference of wedges at its end, and the second side
+  // of the arc R * first side + that difference. (With wedges first, the cone positions became
+  // functions of the translations and every wedge a sum of translations along the cut tree: forms
+  // of thousands of terms on meshes with many singularities, a dense energy matrix and slow
+  // repair solves.)
   LinearElimination elim(num_vars);
   for (int v = 0; v < 2 * nw; ++v) elim.set_priority(v, 1);
+  for (int v = 2 * nw; v < num_vars; ++v) elim.set_priority(v, 2);
   if (pin_) {
     for (int a = 0; a < 2; ++a) {
-      elim.set_priority(wedge_var(0, a), 2);
+      elim.set_priority(wedge_var(0, a), 3);
       elim.add_equation({{wedge_var(0, a), 1.0}}, 0.0);
     }
   }
@@ -356,6 +361,14 @@ struct Evaluator {
 };
 
 }  // namespace
+
+std::vector<int> ParametrizationProblem::forced_degenerate_faces(Progress& progress) {
+  const System& sys = system(ConstraintMode::Hard, 0, progress);
+  std::vector<int> faces;
+  for (int f = 0; f < mesh_.num_faces(); ++f)
+    if (sys.forced_degenerate[f]) faces.push_back(f);
+  return faces;
+}
 
 double ParametrizationProblem::field_energy(const Parametrization& param) const {
   double e = 0;

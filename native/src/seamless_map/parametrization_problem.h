@@ -115,6 +115,10 @@ class ParametrizationProblem {
   ParametrizationSolution solve_with_relinearization(ParametrizationSolveOptions options, double epsilon,
                                                      int max_rounds, Progress& progress);
 
+  // Faces the hard constraints alone make degenerate (three corners sharing u or v, or two equal
+  // corners); the elimination is built (and cached for solve()) with hard linear constraints.
+  std::vector<int> forced_degenerate_faces(Progress& progress);
+
   // Field energy of a pose (same corner layout), without penalty.
   double field_energy(const Parametrization& param) const;
   // max |sum coeff * coordinate - rhs| over the linear constraints.

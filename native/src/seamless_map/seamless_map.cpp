@@ -1,6 +1,7 @@
 #include "seamless_map/seamless_map.h"
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "core/error.h"
@@ -58,7 +59,10 @@ IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, c
   for (int e = 0; e < ne; ++e) {
     if (!iso[e]) continue;
     const int h = mesh.edge_halfedge[e];
-    out.isolines.push_back({h, axis_of(h, nullptr)});
+    Isoline line;
+    line.halfedge = h;
+    line.axis = axis_of(h, &line.misalignment);
+    out.isolines.push_back(line);
   }
   return out;
 }
@@ -75,14 +79,42 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   if (!(options.edge_length > 0) || !std::isfinite(options.edge_length))
     throw Error(ErrorCode::InvalidArgument, "seamless map: the target edge length must be positive");
 
-  ParametrizationProblem problem(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
-  const IsolineSelection iso = select_isolines(mesh, field, cut);
-  for (const auto& [h, axis] : iso.isolines) problem.add_isoline(h, axis);
+  // Isoline constraints that alone collapse a triangle (e.g. a sliver between two nearly collinear
+  // feature edges that the field maps to orthogonal isolines) are dropped, the worst aligned
+  // edge of each such triangle first, until no triangle is forced degenerate.
+  IsolineSelection iso = select_isolines(mesh, field, cut);
+  std::unique_ptr<ParametrizationProblem> problem;
+  for (int attempt = 0;; ++attempt) {
+    problem = std::make_unique<ParametrizationProblem>(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
+    for (const Isoline& line : iso.isolines) problem->add_isoline(line.halfedge, line.axis);
+    const std::vector<int> forced = problem->forced_degenerate_faces(progress);
+    if (forced.empty() || attempt == 8) break;
+    std::vector<int> isoline_of_edge(ne, -1);
+    for (size_t i = 0; i < iso.isolines.size(); ++i) isoline_of_edge[mesh.edge_of[iso.isolines[i].halfedge]] = static_cast<int>(i);
+    std::vector<char> drop(iso.isolines.size(), 0);
+    bool any = false;
+    for (int f : forced) {
+      int worst = -1;
+      for (int k = 0; k < 3; ++k) {
+        const int i = isoline_of_edge[mesh.edge_of[3 * f + k]];
+        if (i >= 0 && (worst < 0 || iso.isolines[i].misalignment > iso.isolines[worst].misalignment)) worst = i;
+      }
+      if (worst >= 0 && !drop[worst]) drop[worst] = 1, any = true;
+    }
+    if (!any) break;
+    std::vector<Isoline> kept;
+    for (size_t i = 0; i < iso.isolines.size(); ++i) {
+      if (drop[i]) iso.dropped.push_back(mesh.edge_of[iso.isolines[i].halfedge]);
+      else kept.push_back(iso.isolines[i]);
+    }
+    iso.isolines.swap(kept);
+  }
   const int isolines = static_cast<int>(iso.isolines.size());
+
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
-  ParametrizationSolution solution = problem.solve(solve_options, progress);
+  ParametrizationSolution solution = problem->solve(solve_options, progress);
 
   SeamlessMap out;
   out.param = std::move(solution.param);
@@ -98,6 +130,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.forced_degenerate = s.forced_degenerate;
   st.isoline_edges = isolines;
   st.dropped_isolines = static_cast<int>(iso.dropped.size());
+  st.dropped_isoline_edges = iso.dropped;
   st.ipopt_solves = s.ipopt_solves;
   st.repair_rounds = s.repair_rounds;
   st.max_region_faces = s.max_region_faces;

@@ -27,6 +27,7 @@ struct SeamlessMapStats {
   int forced_degenerate = 0;      // made degenerate by the isoline constraints alone (0 expected)
   int isoline_edges = 0;          // feature + boundary edges constrained to isolines
   int dropped_isolines = 0;       // feature edges left free (see select_isolines)
+  std::vector<int> dropped_isoline_edges;
   int ipopt_solves = 0;
   int repair_rounds = 0;          // Ipopt repair rounds (0: the Cholesky optimum was regular)
   int max_region_faces = 0;       // most faces constrained in one Ipopt solve
@@ -39,11 +40,17 @@ struct SeamlessMap {
   SeamlessMapStats stats;
 };
 
-// Feature and boundary edges that become isolines: (halfedge, axis constant along it in
-// face(halfedge)'s chart), from the cut graph's edge sectors. An edge is dropped (listed in
-// `dropped`) when its triangle would otherwise have two isolines of one axis (degenerate).
+// Feature and boundary edges that become isolines, from the cut graph's edge sectors. An edge is
+// dropped (listed in `dropped`) when its triangle would otherwise have two isolines of one axis
+// (degenerate); compute_seamless_map drops further edges whose isolines force a triangle to
+// collapse.
+struct Isoline {
+  int halfedge = 0;           // face(halfedge)'s chart
+  int axis = 0;               // coordinate constant along the edge: 0 = u, 1 = v
+  double misalignment = 0;    // radians between the edge and its isoline direction in the field
+};
 struct IsolineSelection {
-  std::vector<std::pair<int, int>> isolines;
+  std::vector<Isoline> isolines;
   std::vector<int> dropped;  // edges
 };
 IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, const CutGraph& cut);
