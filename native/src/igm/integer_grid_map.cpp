@@ -300,8 +300,16 @@ std::vector<IgmRow> path_rows(const TriMesh& mesh, const ExactParametrization& e
   };
   for (int n = 0; n < nn; ++n) {
     if (n == root || !important[n]) continue;
-    // Up from n to its terminal ancestor: the path starts there.
-    emit(tree_path(n), parent[n]);
+    // From the terminal ancestor down to n (a terminal n is reached through its parent edge).
+    std::vector<std::pair<int, bool>> path;
+    if (terminal[n]) {
+      const int e = parent[n];
+      path = tree_path(other(e, n));
+      path.push_back({e, tmesh.edges[e].to == n});
+    } else {
+      path = tree_path(n);
+    }
+    emit(path, parent[n]);
     if (n % 64 == 0) progress.check_cancel();
   }
   for (int e = 0; e < ne; ++e) {
@@ -373,6 +381,19 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   if (!(quantization.scale > 0) || !(options.edge_length > 0))
     throw Error(ErrorCode::InvalidArgument, "integer-grid map: scale and edge length must be positive");
   if (tmesh.nodes.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: empty T-mesh");
+  const int num_nodes = static_cast<int>(tmesh.nodes.size());
+  for (const TMeshNode& n : tmesh.nodes)
+    if (n.point.face < 0 || n.point.face >= nf || n.mesh_vertex >= mesh.num_vertices())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: a T-mesh node lies outside the mesh");
+  for (size_t e = 0; e < tmesh.edges.size(); ++e) {
+    const TMeshEdge& edge = tmesh.edges[e];
+    bool ok = edge.from >= 0 && edge.from < num_nodes && edge.to >= 0 && edge.to < num_nodes && !edge.trace.empty() &&
+              quantization.x[e] >= 0;
+    for (const SurfacePoint& p : edge.trace) ok = ok && p.face >= 0 && p.face < nf;
+    if (!ok) throw Error(ErrorCode::InvalidArgument, "integer-grid map: malformed T-edge " + std::to_string(e));
+  }
+  if (static_cast<int>(seamless.param.is_cut.size()) != ne)
+    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the seamless map's cut flags do not match the mesh");
   for (int h = 0; h < nc; ++h)
     if (sanitized.rotation[h] != seamless.param.rotation[h])
       throw Error(ErrorCode::InvalidArgument, "integer-grid map: the sanitized and the seamless map have different transitions");
@@ -401,91 +422,102 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     }
   std::vector<double> lengths(quantization.x.begin(), quantization.x.end());
   const std::vector<IgmRow> rows = path_rows(mesh, sanitized, tmesh, lengths, root, progress);
-  for (const IgmRow& r : rows) {
-    if (r.terms.empty()) {
-      if (std::abs(r.rhs) > 0)
-        throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
-      continue;
-    }
-    problem.add_linear_constraint(r.terms, r.rhs);
-    ++stats.constraints;
-  }
-  {
-    const SurfacePoint& p = tmesh.nodes[root].point;
-    const PointExpr e = surface_point_expr(p);
-    for (int a = 0; a < 2; ++a) {
-      problem.add_linear_constraint(e.terms[a], std::round(scale * p.uv[a]));
-      ++stats.constraints;
-    }
-  }
+  for (const IgmRow& r : rows)
+    if (r.terms.empty() && std::abs(r.rhs) > 0)
+      throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
+  const SurfacePoint& root_point = tmesh.nodes[root].point;
+  auto add_path_constraints = [&]() {
+    problem.clear_linear_constraints();
+    int count = 0;
+    for (const IgmRow& r : rows)
+      if (!r.terms.empty()) problem.add_linear_constraint(r.terms, r.rhs), ++count;
+    const PointExpr e = surface_point_expr(root_point);
+    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(e.terms[a], std::round(scale * root_point.uv[a])), ++count;
+    stats.constraints = count;
+  };
   problem.set_pin_translation(false);
 
-  // Penalty phase with re-linearization, then the hard solve around the last pose (§7.1).
   Timer solve_timer;
-  Parametrization pose = seamless.param;
-  pose.uv *= scale;
+  Parametrization seamless_pose = seamless.param;
+  seamless_pose.uv *= scale;
   ParametrizationSolveOptions so;
   so.penalty_weight = options.penalty_weight;
   so.max_repair_rounds = options.max_repair_rounds;
-  so.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
-  ParametrizationSolution solution;
-  const int rounds = std::max(1, options.max_penalty_rounds);
-  for (int round = 0; round < rounds; ++round) {
-    so.linear_constraints = ConstraintMode::Penalty;
-    so.reference = &pose;
-    so.progress_begin = 0.7 * round / rounds;
-    so.progress_end = 0.7 * (round + 1) / rounds;
+  so.relinearization_rounds = options.relinearization_rounds;
+  const RegularityMode repair = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
+  Parametrization pose;
+  std::vector<char> snap_vertices;
+  std::vector<IsolineConstraint> iso;
+  // Penalty phase with re-linearization (§7.1), then the hard solve around the last pose. Hard
+  // phase: the integer quantities that Cz = b determines — positions of the singular and corner
+  // vertices, cut translations, feature/boundary isoline values — rounded from the penalty optimum
+  // (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the exact
+  // elimination stays integral (the path rows carry barycentric coefficients).
+  auto solve_global = [&](bool penalty_regularity, double begin, double end) {
+    add_path_constraints();
+    pose = seamless_pose;
+    ParametrizationSolution solution;
+    const int rounds = std::max(1, options.max_penalty_rounds);
+    for (int round = 0; round < rounds; ++round) {
+      so.linear_constraints = ConstraintMode::Penalty;
+      so.regularity = penalty_regularity ? repair : RegularityMode::Off;
+      so.reference = &pose;
+      so.progress_begin = begin + (end - begin) * 0.7 * round / rounds;
+      so.progress_end = begin + (end - begin) * 0.7 * (round + 1) / rounds;
+      solution = problem.solve(so, progress);
+      ++stats.penalty_iterations;
+      stats.ipopt_solves += solution.stats.ipopt_solves;
+      stats.ipopt_iterations += solution.stats.ipopt_iterations;
+      stats.penalty_violation.push_back(solution.stats.constraint_violation);
+      if (penalty_regularity) pose = solution.param;  // the next round is linearized around it
+      // Without regularity the next round would give the same result.
+      if (solution.stats.constraint_violation <= options.penalty_tolerance || !penalty_regularity) break;
+    }
+    const Parametrization& integers = solution.param;
+    snap_vertices = independent_vertices(mesh, integers, tmesh);
+    iso = isoline_constraints(mesh, integers, field.feature_edge, true);
+    problem.clear_linear_constraints();
+    std::vector<char> wedge_done(problem.num_wedges(), 0);
+    for (int c = 0; c < nc; ++c) {
+      const int w = problem.wedge_of_corner()[c];
+      if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
+      wedge_done[w] = 1;
+      for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(integers.uv(c, a)));
+    }
+    for (int h = 0; h < nc; ++h) {
+      const int o = mesh.opposite[h];
+      if (o < 0 || o < h || !integers.is_cut[mesh.edge_of[h]]) continue;
+      PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
+      transfer(mesh, integers.rotation, h, t);
+      const Vec2 value = integers.translation(mesh, h);
+      for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
+    }
+    for (const IsolineConstraint& c : iso)
+      problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(integers.uv(c.halfedge, c.axis)));
+    // The hard solve is linearized around the penalty optimum where it is healthy and around the
+    // seamless map elsewhere.
+    const Parametrization penalty_optimum = integers;
+    so.linear_constraints = ConstraintMode::Hard;
+    so.regularity = repair;
+    so.reference = penalty_regularity ? &pose : &seamless_pose;
+    so.progress_begin = begin + (end - begin) * 0.7;
+    so.progress_end = end;
     solution = problem.solve(so, progress);
-    ++stats.penalty_iterations;
+    pose = penalty_optimum;
     stats.ipopt_solves += solution.stats.ipopt_solves;
     stats.ipopt_iterations += solution.stats.ipopt_iterations;
-    pose = solution.param;
-    stats.penalty_violation.push_back(solution.stats.constraint_violation);
-    if (solution.stats.constraint_violation <= options.penalty_tolerance) break;
-  }
-  // Hard phase: the integer quantities that Cz = b determines — positions of the singular and
-  // corner vertices, cut translations, feature/boundary isoline values — rounded from the penalty
-  // optimum (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the
-  // exact elimination stays integral (the T-edge rows themselves carry barycentric coefficients
-  // and are highly redundant).
-  const std::vector<char> snap_vertices = independent_vertices(mesh, pose, tmesh);
-  const std::vector<IsolineConstraint> iso = isoline_constraints(mesh, pose, field.feature_edge, true);
-  problem.clear_linear_constraints();
-  std::vector<char> wedge_done(problem.num_wedges(), 0);
-  for (int c = 0; c < nc; ++c) {
-    const int w = problem.wedge_of_corner()[c];
-    if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
-    wedge_done[w] = 1;
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(pose.uv(c, a)));
-  }
-  for (int h = 0; h < nc; ++h) {
-    const int o = mesh.opposite[h];
-    if (o < 0 || o < h || !pose.is_cut[mesh.edge_of[h]]) continue;
-    PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
-    transfer(mesh, pose.rotation, h, t);
-    const Vec2 value = pose.translation(mesh, h);
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
-  }
-  for (const IsolineConstraint& c : iso) problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(pose.uv(c.halfedge, c.axis)));
-  so.linear_constraints = ConstraintMode::Hard;
-  so.reference = &pose;
-  so.progress_begin = 0.7;
-  so.progress_end = 0.85;
-  solution = problem.solve(so, progress);
-  stats.ipopt_solves += solution.stats.ipopt_solves;
-  stats.ipopt_iterations += solution.stats.ipopt_iterations;
-  for (const IgmRow& r : rows) {
-    double value = -r.rhs;
-    for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
-    stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
-  }
-  stats.seconds_solve = solve_timer.seconds();
-  result.continuous = solution.param;
-  const Parametrization& solved = result.continuous;
+    stats.max_constraint_violation = 0;
+    for (const IgmRow& r : rows) {
+      double value = -r.rhs;
+      for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
+      stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
+    }
+    return solution;
+  };
+  ParametrizationSolution solution = solve_global(options.penalty_regularity, 0, 0.4);
 
   // Exact rounding: singular/corner vertices snapped to integers (translations become integral),
   // feature and boundary edges exact isolines on integer values.
-  Timer sanitize_timer;
   SanitizeOptions sanitize;
   sanitize.fraction_bits = options.fraction_bits;
   sanitize.snap_bits = 0;
@@ -496,26 +528,84 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     sanitize.snap_corner_axes[3 * f + k] |= uint8_t(1 << c.axis);
     sanitize.snap_corner_axes[3 * f + (k + 1) % 3] |= uint8_t(1 << c.axis);
   }
-  // Distance from integers before snapping.
-  for (int c = 0; c < nc; ++c) {
-    const int v = mesh.F(c / 3, c % 3);
-    for (int a = 0; a < 2; ++a)
-      if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
-        stats.max_integer_residual = std::max(stats.max_integer_residual, distance_to_integer(solved.uv(c, a)));
+  // Distance from integers of what snapping rounds.
+  auto integer_residual = [&](const Parametrization& map) {
+    double worst = 0;
+    for (int c = 0; c < nc; ++c) {
+      const int v = mesh.F(c / 3, c % 3);
+      for (int a = 0; a < 2; ++a)
+        if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
+          worst = std::max(worst, distance_to_integer(map.uv(c, a)));
+    }
+    for (int h = 0; h < nc; ++h) {
+      if (mesh.opposite[h] < 0 || !map.is_cut[mesh.edge_of[h]]) continue;
+      const Vec2 t = map.translation(mesh, h);
+      worst = std::max({worst, distance_to_integer(t.x()), distance_to_integer(t.y())});
+    }
+    return worst;
+  };
+  auto round_exactly = [&](const Parametrization& solved) {
+    Timer sanitize_timer;
+    result.continuous = solved;
+    stats.max_integer_residual = integer_residual(solved);
+    SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
+    stats.unresolved_equations = exact.unresolved_equations;
+    result.param = std::move(exact.param);
+    count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
+    stats.seconds_sanitize += sanitize_timer.seconds();
+  };
+  progress.update(0.42);
+  round_exactly(solution.param);
+  stats.path = options.penalty_regularity ? "global" : "global (penalty without regularity)";
+  stats.penalty_integer_residual = integer_residual(pose);
+
+  // Escalation: the paper's penalty phase with re-linearized regularity constraints.
+  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity &&
+      !options.penalty_regularity) {
+    const IntegerGridMap first = result;
+    const IgmStats first_stats = stats;
+    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    solution = solve_global(true, 0.45, 0.85);
+    round_exactly(solution.param);
+    stats.penalty_integer_residual = integer_residual(pose);
+    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
+      stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles without)";
+    } else {
+      result.continuous = first.continuous;
+      result.param = first.param;
+      const int iterations = stats.penalty_iterations;
+      stats = first_stats;
+      stats.penalty_iterations = iterations;
+    }
   }
-  for (int h = 0; h < nc; ++h) {
-    if (mesh.opposite[h] < 0 || !solved.is_cut[mesh.edge_of[h]]) continue;
-    const Vec2 t = solved.translation(mesh, h);
-    stats.max_integer_residual =
-        std::max({stats.max_integer_residual, distance_to_integer(t.x()), distance_to_integer(t.y())});
+  stats.seconds_solve = solve_timer.seconds();
+
+  // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
+  // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
+  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity && options.allow_fallback) {
+    Parametrization seamless_pose = seamless.param;
+    seamless_pose.uv *= scale;
+    so.regularity = RegularityMode::AllFaces;
+    so.reference = &seamless_pose;
+    so.progress_begin = 0.88;
+    so.progress_end = 0.99;
+    const ParametrizationSolution all = problem.solve(so, progress);
+    stats.ipopt_solves += all.stats.ipopt_solves;
+    stats.ipopt_iterations += all.stats.ipopt_iterations;
+    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    const IntegerGridMap global = result;
+    const IgmStats global_stats = stats;
+    round_exactly(all.param);
+    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
+      stats.fallback_used = true;
+      stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles before)";
+    } else {
+      result.continuous = global.continuous;
+      result.param = global.param;
+      stats = global_stats;
+      stats.path = "global (all-faces fallback did not help)";
+    }
   }
-  progress.update(0.88);
-  SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
-  stats.unresolved_equations = exact.unresolved_equations;
-  stats.seconds_sanitize = sanitize_timer.seconds();
-  result.param = std::move(exact.param);
-  count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
-  stats.path = "global";
 
   stats.parametric_area = exact_parametric_area(result.param, &stats.area_is_integral);
   stats.seconds = timer.seconds();
@@ -531,6 +621,7 @@ Json igm_report(const IgmStats& s) {
               {"penalty_iterations", s.penalty_iterations},
               {"seconds", s.seconds},
               {"path", s.path},
+              {"penalty_integer_residual", s.penalty_integer_residual},
               {"constraints", s.constraints},
               {"max_constraint_violation", s.max_constraint_violation},
               {"unresolved_equations", s.unresolved_equations},

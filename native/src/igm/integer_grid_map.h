@@ -7,11 +7,20 @@
 // integer_grid_rows), p_b = τ(p_a) + Σ x_e · d_e in the chart where the path ends. One node (a
 // singular one if any) is fixed at its rounded position, so all of them get integer coordinates.
 //
-// Solve (§7.1): penalty λ‖Cz − b‖² with the seamless-map solver's regularity repair (Ipopt,
-// re-linearized around each result) until ‖Cz − b‖∞ ≤ tolerance, then the hard-constrained
-// solve linearized around the last pose, in which the integer quantities that Cz = b determines
-// (singular/corner positions, cut translations, feature isoline values, rounded from the penalty
-// optimum) are imposed exactly. Then exact sanitization with snapping.
+// Solve (§7.1), in escalating attempts until the exact map has no flipped/degenerate triangle:
+//  1. (default) one equality-only penalty solve λ‖Cz − b‖² (λ = 1e6; it meets ‖Cz − b‖∞ ≤ 1e-4
+//     on every mesh tested), then the hard solve with Ipopt repair of flipped triangles
+//     (tri-sector constraints linearized around the seamless map);
+//  2. the paper's penalty phase: penalty solves with the regularity repair, each re-linearized
+//     around the previous result, until ‖Cz − b‖∞ ≤ 1e-4, then the hard solve around the last pose;
+//  3. fallback: the hard solve with every triangle under tri-sector constraints around the
+//     seamless map (stats.fallback_used). The paper's §7.1.1 per-cell fallback (T-mesh edges
+//     inserted into the mesh, cells mapped onto their integer rectangles) is not implemented.
+// The hard solve imposes the integer quantities that Cz = b determines (singular/corner vertex
+// positions, cut translations, feature/boundary isoline values, rounded from the penalty optimum,
+// which is within 1e-4 of them), exactly: unit coefficients keep the elimination integral (the
+// path rows themselves carry barycentric coefficients). Finally sanitize_with_isolines snaps
+// them to exact integers. stats.path names the attempt that produced the result.
 #pragma once
 #include <string>
 #include <vector>
@@ -35,9 +44,17 @@ struct IgmOptions {
   double penalty_tolerance = 1e-4;  // stop the penalty phase at ‖Cz − b‖∞ ≤ this (quad units)
   int max_penalty_rounds = 8;    // penalty solves (each re-linearized around the previous one)
   int max_repair_rounds = 24;    // Ipopt repair rounds per solve
+  int relinearization_rounds = 1;  // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;        // of the exact result
   bool regularity = true;        // Ipopt repair of flipped triangles (off: equality-only solves)
-  bool allow_fallback = true;    // §7.1.1 fallback when the global solve stays irregular
+  // Regularity also in the penalty solves (paper §7.1). Off (default, much faster): one
+  // equality-only penalty solve fixes the integer values (they follow from Cz = b, not from the
+  // regularity) and the hard solve alone repairs flips, linearized around the seamless map; if
+  // flips remain, the paper's re-linearized penalty phase runs as well and the better map is kept.
+  bool penalty_regularity = false;
+  // When the exact map has flipped/degenerate triangles: hard solve again with all triangles
+  // under tri-sector constraints around the seamless map (not yet the paper's §7.1.1 per-cell map).
+  bool allow_fallback = true;
 };
 
 struct IgmStats {
@@ -45,10 +62,11 @@ struct IgmStats {
   int degenerate_triangles = 0;     // in the exact result
   double max_integer_residual = 0;  // before snapping: largest distance of a singular vertex /
                                     // transition translation / feature isoline from an integer
+  double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)
   double max_constraint_violation = 0;  // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
   bool fallback_used = false;
   std::string path;                 // "global" or "fallback: <what ran>"
-  int penalty_iterations = 0;       // penalty solves run
+  int penalty_iterations = 0;       // penalty solves run (all attempts)
   std::vector<double> penalty_violation;  // ‖Cz − b‖∞ after each penalty solve
   int constraints = 0;              // scalar rows of C
   int unresolved_equations = 0;     // of the sanitization (0 expected)
