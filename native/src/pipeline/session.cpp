@@ -415,7 +415,22 @@ void Session::run_quad_stage(Progress& progress) {
     set_component_range(c, progress);
     if (!state.quads) {
       try {
-        state.quads = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
+        QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
+        // Never hand out a broken mesh: the quads must form a consistently oriented 2-manifold of
+        // the component's topology.
+        const QuadTopology t = quad_topology(extraction.quads);
+        const ComponentInfo& info = intake_->components[c];
+        std::string defect;
+        if (t.non_manifold_edges > 0) defect += std::to_string(t.non_manifold_edges) + " non-manifold edge(s); ";
+        if (t.inconsistent_edges > 0) defect += std::to_string(t.inconsistent_edges) + " inconsistently oriented edge(s); ";
+        if (t.degenerate_quads > 0) defect += std::to_string(t.degenerate_quads) + " degenerate quad(s); ";
+        if (defect.empty() && t.euler_characteristic != info.euler_characteristic)
+          defect = "Euler characteristic " + std::to_string(t.euler_characteristic) + " instead of " +
+                   std::to_string(info.euler_characteristic) + "; ";
+        if (!defect.empty())
+          throw Error(ErrorCode::StageFailed, "quad extraction: the quads do not form a valid mesh (" +
+                                                  defect.substr(0, defect.size() - 2) + "); no output was written");
+        state.quads = std::move(extraction);
       } catch (const Error& e) {
         rethrow_for_component(e, c, components_.size());
       }
