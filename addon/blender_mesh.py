@@ -79,11 +79,9 @@ def create_quad_object(context, source, vertices, quads, quad_triangle, source_m
 def write_grid_uvs(mesh, source_mesh, corner_uv, quads_per_unit, layer_name="QGP Grid"):
     """Writes per-loop UVs (corner_uv: (triangles, 3, 2), 1 unit = 1 quad) scaled to
     `quads_per_unit` quads per UV unit into the layer `layer_name` (created if needed)."""
-    loop_uv = np.zeros((source_mesh.num_loops, 2), np.float32)
-    flat_loops = source_mesh.triangle_loops.reshape(-1)
-    flat_uv = corner_uv.reshape(-1, 2) / float(quads_per_unit)
-    valid = np.isfinite(flat_uv).all(axis=1)
-    loop_uv[flat_loops[valid]] = flat_uv[valid]
+    loop_uv = meshdata.loop_uvs_from_triangles(corner_uv, source_mesh.triangles, source_mesh.triangle_loops,
+                                               source_mesh.triangle_polygon, source_mesh.num_loops)
+    loop_uv = np.nan_to_num(loop_uv / float(quads_per_unit)).astype(np.float32)
     layer = mesh.uv_layers.get(layer_name) or mesh.uv_layers.new(name=layer_name)
     layer.data.foreach_set("uv", loop_uv.reshape(-1))
     mesh.uv_layers.active = layer

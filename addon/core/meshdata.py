@@ -27,3 +27,53 @@ def edge_vertex_pairs(mesh, flags):
     mesh.edges.foreach_get("vertices", e)
     e = e.reshape(-1, 2)
     return np.ascontiguousarray(e[np.asarray(flags, bool)])
+
+
+def _rotate_quarter(p, r):
+    for _ in range(r % 4):
+        p = np.array([-p[1], p[0]])
+    return p
+
+
+def loop_uvs_from_triangles(corner_uv, triangles, triangle_loops, triangle_polygon, num_loops):
+    """Per-loop UVs (num_loops, 2) from per-triangle-corner integer-grid UVs (t, 3, 2).
+
+    A polygon split into several triangles may have them in different charts (a seam along an
+    inner diagonal); their corners are brought into the chart of the polygon's first triangle
+    through the transition across each shared diagonal (a quarter-turn rotation plus a
+    translation, recovered from the two shared corners), so every loop of a polygon is in one chart."""
+    loop_uv = np.full((num_loops, 2), np.nan)
+    by_polygon = {}
+    for t, p in enumerate(triangle_polygon.tolist()):
+        by_polygon.setdefault(p, []).append(t)
+    for tris in by_polygon.values():
+        if len(tris) == 1:
+            t = tris[0]
+            loop_uv[triangle_loops[t]] = corner_uv[t]
+            continue
+        placed = {tris[0]: corner_uv[tris[0]].copy()}
+        pending = list(tris[1:])
+        while pending:
+            progressed = False
+            for t in list(pending):
+                for s, uv_s in placed.items():
+                    shared = [v for v in triangles[t] if v in triangles[s]]
+                    if len(shared) != 2:
+                        continue
+                    ks = [list(triangles[s]).index(v) for v in shared]
+                    kt = [list(triangles[t]).index(v) for v in shared]
+                    ds = uv_s[ks[1]] - uv_s[ks[0]]
+                    dt = corner_uv[t][kt[1]] - corner_uv[t][kt[0]]
+                    r = min(range(4), key=lambda r: np.abs(_rotate_quarter(dt, r) - ds).sum())
+                    shift = uv_s[ks[0]] - _rotate_quarter(corner_uv[t][kt[0]], r)
+                    placed[t] = np.array([_rotate_quarter(c, r) + shift for c in corner_uv[t]])
+                    pending.remove(t)
+                    progressed = True
+                    break
+            if not progressed:  # triangles of the polygon that share no edge: keep their own chart
+                for t in pending:
+                    placed[t] = corner_uv[t].copy()
+                pending = []
+        for t, uv in placed.items():
+            loop_uv[triangle_loops[t]] = uv
+    return loop_uv
