@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 
 #include "core/error.h"
@@ -49,6 +50,9 @@ TEST(LayoutMeshes, FieldSeamlessTMeshAndQuantizationInvariants) {
   std::vector<std::string> failed;
   int round_runs = 0, round_invalid = 0;
   for (const std::string& name : test::manifold_mesh_files()) {
+    // dragon-genus1 (a noisy scan: ~2100 singularities for a 2000-quad target) spends many
+    // minutes in the seamless map's repair; the seamless sweep covers it, this one does not.
+    if (name == "dragon-genus1.obj" && !std::getenv("QGP_TEST_MESHES")) continue;
     // One session per mesh: field, cut, seamless map and T-mesh are computed once; every density
     // and quantizer only re-quantizes.
     Session session(read_mesh_file(test::mesh_path(name)));
