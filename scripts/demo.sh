@@ -12,9 +12,7 @@ build/bin/qgp info out/demo/suzanne.obj --report out/demo/suzanne_info.json
 echo "(report: out/demo/suzanne_info.json)"
 echo
 echo "== qgp remesh out/demo/suzanne.obj -o out/demo/suzanne_quads.obj --faces 2000"
-if build/bin/qgp remesh out/demo/suzanne.obj -o out/demo/suzanne_quads.obj --faces 2000 \
-     --uv-out out/demo/suzanne_uv.obj --report out/demo/suzanne_remesh.json; then
-  echo "quad mesh: out/demo/suzanne_quads.obj (report: out/demo/suzanne_remesh.json)"
-else
-  echo "(remesh did not complete; see the message above and out/demo/suzanne_remesh.json)"
-fi
+build/bin/qgp remesh out/demo/suzanne.obj -o out/demo/suzanne_quads.obj --faces 2000 \
+  --uv-out out/demo/suzanne_uv.obj --layout-out out/demo/suzanne_layout.obj --report out/demo/suzanne_remesh.json
+echo "quad mesh: out/demo/suzanne_quads.obj, integer-grid UVs: out/demo/suzanne_uv.obj,"
+echo "T-mesh layout: out/demo/suzanne_layout.obj, report: out/demo/suzanne_remesh.json"
