@@ -13,29 +13,35 @@
 namespace qgp {
 namespace {
 
+// Records the progress of a remesh job and stops it when the seamless-map stage begins (the
+// later stages have their own tests).
 struct Recorder {
   int cross_field_updates = 0, cut_graph_updates = 0;
   double last_fraction = 0;
   bool fractions_in_range = true;
+  std::atomic<bool> stop{false};
   Progress progress() {
     return Progress(
         [this](const std::string& stage, double fraction) {
           if (fraction < 0 || fraction > 1) fractions_in_range = false;
           if (stage == "cross_field" && fraction > 0) ++cross_field_updates;
           if (stage == "cut_graph" && fraction > 0) ++cut_graph_updates;
+          if (stage == "seamless_map") stop = true;
           last_fraction = fraction;
         },
-        nullptr);
+        &stop);
   }
 };
 
-// Runs a remesh job; returns its error code, or kCompleted.
+// Runs a remesh job; kCompleted when it got through the field stages (stopped by the Recorder
+// at the seamless map), else its error code.
 constexpr ErrorCode kCompleted = static_cast<ErrorCode>(0);
 ErrorCode run_remesh(Session& session, Progress& progress) {
   try {
     session.run(Job::Remesh, progress);
   } catch (const Error& e) {
-    return e.code();
+    const bool at_seamless = std::string(e.what()).find("'seamless_map'") != std::string::npos;
+    return e.code() == ErrorCode::Cancelled && at_seamless ? kCompleted : e.code();
   }
   return kCompleted;
 }
@@ -46,7 +52,7 @@ TEST(FieldSession, ReportsTheFieldOfEveryComponent) {
   Progress progress = recorder.progress();
   EXPECT_EQ(run_remesh(session, progress), kCompleted);
   const Json& report = session.report();
-  EXPECT_EQ(report["status"], "ok") << report["error"].dump();
+  EXPECT_TRUE(report["error"].is_object());  // stopped at the seamless map on purpose
   ASSERT_TRUE(report.contains("field"));
   const Json& field = report["field"];
   EXPECT_EQ(field["index_sum"], field["euler_characteristic"]);
@@ -106,7 +112,8 @@ TEST(FieldSession, CachesFieldUntilFeaturesChange) {
     options.feature_edges.push_back({session.intake()->input_vertex[mesh.from(h)],
                                      session.intake()->input_vertex[mesh.to(h)]});
   session.set_options(options);
-  Progress p4;
+  Recorder fourth;
+  Progress p4 = fourth.progress();
   EXPECT_EQ(run_remesh(session, p4), kCompleted);
   EXPECT_GE(session.report()["field"]["feature_edges"].get<int>(), 20);
 }
@@ -124,7 +131,8 @@ TEST(FieldSession, CancelInsideTheFieldStagesThenRunAgain) {
     EXPECT_EQ(session.report()["status"], "error");
   }
   // Nothing half-done is kept: the next run completes both stages.
-  Progress progress;
+  Recorder recorder;
+  Progress progress = recorder.progress();
   EXPECT_EQ(run_remesh(session, progress), kCompleted);
   EXPECT_EQ(session.report()["field"]["index_sum"], 2);
 }
