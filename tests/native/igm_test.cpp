@@ -326,35 +326,13 @@ void sweep(const std::vector<std::string>& names, const std::vector<int>& target
   }
 }
 
-// Quick meshes within the runtime budget of the suite. In the full sweep below only: fertility
-// at 500 quads (the re-linearized penalty phase takes ~200 s) and camelhead, beetle (open) and
-// mnf07 (the extractor finds one face with 8 sides at an index -1 singularity of
-// their otherwise valid integer-grid maps: open issue).
+// Meshes within the runtime budget of the suite. Not here: fertility at 500 quads (the
+// re-linearized penalty phase takes ~200 s) and camelhead, beetle (open) and mnf07 (the extractor
+// finds one face with 8 sides at an index -1 singularity of their otherwise valid integer-grid
+// maps: open issue); scripts/bench.sh runs every mesh.
 TEST(IgmMeshes, QuickMeshesAtTwoDensities) {
   sweep({"spot.obj", "bunny.off", "torus.obj", "fandisk.obj", "joint.obj"});
   sweep({"fertility.off"}, {2000});
-}
-
-// Every manifold mesh (the large scans take minutes): run with QGP_IGM_ALL_MESHES=1
-// (optionally QGP_IGM_MESHES=name,name to pick some).
-TEST(IgmMeshes, EveryManifoldMeshAtTwoDensities) {
-  if (!std::getenv("QGP_IGM_ALL_MESHES")) GTEST_SKIP() << "set QGP_IGM_ALL_MESHES=1 to run every manifold mesh";
-  // QGP_IGM_MESHES=a.obj,b.off restricts the sweep to those meshes.
-  std::vector<std::string> names = test::manifold_mesh_files();
-  if (const char* list = std::getenv("QGP_IGM_MESHES")) {
-    names.clear();
-    std::string item;
-    for (const char* p = list;; ++p) {
-      if (*p == ',' || *p == 0) {
-        if (!item.empty()) names.push_back(item);
-        item.clear();
-        if (*p == 0) break;
-      } else {
-        item += *p;
-      }
-    }
-  }
-  sweep(names);
 }
 
 // The rows of C z = b hold on the map the T-mesh was traced on when the lengths are its
