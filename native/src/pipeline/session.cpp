@@ -121,39 +121,40 @@ void Session::report_component_preparation() {
                                            " feature edge(s) are not edges of the repaired mesh and were ignored");
 }
 
-void Session::run_field_stages(Progress& progress) {
-  // Each component gets a share of the stage's progress proportional to its face count.
-  std::vector<double> share_end(components_.size());
-  double faces = 0;
-  for (size_t c = 0; c < components_.size(); ++c) share_end[c] = faces += components_[c].mesh.num_faces();
-  auto set_share = [&](size_t c) {
-    progress.set_range(c == 0 ? 0.0 : share_end[c - 1] / faces, share_end[c] / faces);
-  };
-
-  Timer field_timer;
-  progress.begin_stage("cross_field");
+template <class Body>
+void Session::for_each_component(const char* stage, Progress& progress, Body body) {
+  Timer timer;
+  progress.begin_stage(stage);
+  double faces = 0, done = 0;
+  for (const ComponentState& state : components_) faces += state.mesh.num_faces();
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
-    if (state.field) continue;
-    set_share(c);
+    progress.set_range(done / faces, (done + state.mesh.num_faces()) / faces);
+    done += state.mesh.num_faces();
+    try {
+      body(c, state);
+    } catch (const Error& e) {
+      if (components_.size() <= 1 || e.code() == ErrorCode::Cancelled) throw;
+      throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
+    }
+  }
+  report_["timings_s"][stage] = timer.seconds();
+}
+
+void Session::run_field_stages(Progress& progress) {
+  for_each_component("cross_field", progress, [&](size_t, ComponentState& state) {
+    if (state.field) return;
     CrossFieldOptions field_options;
     field_options.feature_edges = state.feature_edges;
     field_options.sharp_angle_deg = -1;  // dihedral features are already in feature_edges
     state.field = compute_cross_field(state.mesh, field_options, progress);
     state.cut.reset();
-  }
-  report_["timings_s"]["cross_field"] = field_timer.seconds();
-
-  Timer cut_timer;
-  progress.begin_stage("cut_graph");
-  for (size_t c = 0; c < components_.size(); ++c) {
-    ComponentState& state = components_[c];
-    if (state.cut) continue;
-    set_share(c);
+  });
+  for_each_component("cut_graph", progress, [&](size_t, ComponentState& state) {
+    if (state.cut) return;
     state.cut = compute_cut_graph(state.mesh, *state.field, progress);
     state.seamless.reset();
-  }
-  report_["timings_s"]["cut_graph"] = cut_timer.seconds();
+  });
 
   // Report: totals plus one entry per component. index_sum is in full index units (quarter
   // turns / 4) so that it reads as the Euler characteristic.
@@ -202,35 +203,11 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   collect_results(job, progress);
 }
 
-void Session::set_component_range(size_t c, Progress& progress) const {
-  double faces = 0, before = 0;
-  for (size_t i = 0; i < components_.size(); ++i) {
-    if (i < c) before += components_[i].mesh.num_faces();
-    faces += components_[i].mesh.num_faces();
-  }
-  progress.set_range(before / faces, (before + components_[c].mesh.num_faces()) / faces);
-}
-
-namespace {
-
-// Prefixes a stage failure with the component it happened in (when there are several).
-[[noreturn]] void rethrow_for_component(const Error& e, size_t c, size_t count) {
-  if (count <= 1 || e.code() == ErrorCode::Cancelled) throw e;
-  throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
-}
-
-}  // namespace
 
 void Session::run_seamless_stage(Progress& progress) {
-  Timer timer;
-  progress.begin_stage("seamless_map");
   const double edge_length = target_edge_length();
-  double faces = 0, done = 0;
-  for (const ComponentState& state : components_) faces += state.mesh.num_faces();
-  for (ComponentState& state : components_) {
-    progress.set_range(done / faces, (done + state.mesh.num_faces()) / faces);
-    done += state.mesh.num_faces();
-    if (state.seamless) continue;  // a new density only rescales the quantization
+  for_each_component("seamless_map", progress, [&](size_t, ComponentState& state) {
+    if (state.seamless) return;  // a new density only rescales the quantization
     SeamlessMapOptions options;
     options.edge_length = edge_length;
     state.seamless = compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress);
@@ -238,8 +215,7 @@ void Session::run_seamless_stage(Progress& progress) {
     state.exact_seamless.reset();
     state.tmesh.reset();
     state.quantization.reset();
-  }
-  report_["timings_s"]["seamless_map"] = timer.seconds();
+  });
 
   Json per_component = Json::array();
   int flipped = 0, degenerate = 0, iterations = 0;
@@ -276,36 +252,27 @@ void Session::run_seamless_stage(Progress& progress) {
 
 
 void Session::run_tmesh_stage(Progress& progress) {
-  Timer timer;
-  progress.begin_stage("tmesh");
   Json per_component = Json::array();
-  for (size_t c = 0; c < components_.size(); ++c) {
-    ComponentState& state = components_[c];
-    set_component_range(c, progress);
+  for_each_component("tmesh", progress, [&](size_t, ComponentState& state) {
     if (!state.tmesh) {
       state.quantization.reset();
       // Feature edges the seamless map left free (their isolines would collapse a triangle) are
       // not walls of the T-mesh.
       state.isoline_edges = state.feature_edges;
       for (int e : state.seamless->stats.dropped_isoline_edges) state.isoline_edges[e] = 0;
-      try {
-        const SanitizeResult exact = sanitize_with_isolines(
-            state.mesh, state.seamless->param,
-            isoline_constraints(state.mesh, state.seamless->param, state.isoline_edges, true), SanitizeOptions{});
-        if (exact.unresolved_equations > 0)
-          throw Error(ErrorCode::StageFailed, "T-mesh: " + std::to_string(exact.unresolved_equations) +
-                                                  " transition or isoline equation(s) of the seamless map cannot hold exactly");
-        TraceOptions trace_options;
-        trace_options.feature_edges = state.isoline_edges;
-        state.tmesh = trace_tmesh(state.mesh, exact.param, trace_options, progress);
-        state.exact_seamless = std::move(exact.param);
-      } catch (const Error& e) {
-        rethrow_for_component(e, c, components_.size());
-      }
+      const SanitizeResult exact = sanitize_with_isolines(
+          state.mesh, state.seamless->param,
+          isoline_constraints(state.mesh, state.seamless->param, state.isoline_edges, true), SanitizeOptions{});
+      if (exact.unresolved_equations > 0)
+        throw Error(ErrorCode::StageFailed, "T-mesh: " + std::to_string(exact.unresolved_equations) +
+                                                " transition or isoline equation(s) of the seamless map cannot hold exactly");
+      TraceOptions trace_options;
+      trace_options.feature_edges = state.isoline_edges;
+      state.tmesh = trace_tmesh(state.mesh, exact.param, trace_options, progress);
+      state.exact_seamless = std::move(exact.param);
     }
     per_component.push_back(tmesh_report(*state.tmesh));
-  }
-  report_["timings_s"]["tmesh"] = timer.seconds();
+  });
   Json total = {{"nodes", 0}, {"edges", 0}, {"cells", 0}, {"singular_nodes", 0}};
   for (const Json& r : per_component)
     for (auto& [key, value] : total.items()) value = value.get<int64_t>() + r.value(key, int64_t(0));
@@ -314,14 +281,10 @@ void Session::run_tmesh_stage(Progress& progress) {
 }
 
 void Session::run_quantization_stage(Progress& progress) {
-  Timer timer;
-  progress.begin_stage("quantization");
   const double edge_length = target_edge_length();
   Json per_component = Json::array();
   int64_t quads = 0;
-  for (size_t c = 0; c < components_.size(); ++c) {
-    ComponentState& state = components_[c];
-    set_component_range(c, progress);
+  for_each_component("quantization", progress, [&](size_t, ComponentState& state) {
     const double scale = state.seamless_edge_length / edge_length;
     if (state.quantization && (state.quantization_scale != scale || state.quantizer != options_.quantizer))
       state.quantization.reset();
@@ -330,66 +293,53 @@ void Session::run_quantization_stage(Progress& progress) {
       state.quads.reset();
       QuantizationOptions options;
       options.scale = scale;
-      try {
-        if (options_.quantizer == Quantizer::Greedy) {
-          state.quantization = quantize(*state.tmesh, options, progress);
-        } else {
-          // The rounding baseline: its rounded map is the integer-grid map (when it is valid).
-          options.method = QuantizationMethod::Round;
-          const TraceFunction trace = [&state](const ExactParametrization& param, Progress& p) {
-            TraceOptions trace_options;
-            trace_options.feature_edges = state.isoline_edges;
-            return trace_tmesh(state.mesh, param, trace_options, p);
-          };
-          RoundingResult rounded = quantize_by_rounding(state.mesh, state.seamless->param, state.isoline_edges,
-                                                        *state.tmesh, options, trace, progress);
-          if (!rounded.quantization.valid)
-            throw Error(ErrorCode::StageFailed, "quantization (round): " + rounded.quantization.invalid_reason);
-          state.quantization = std::move(rounded.quantization);
-          state.igm = std::move(rounded.map.param);
-          state.igm_stats = IgmStats{};
-          state.igm_stats.path = "round";
-          state.igm_stats.flipped_triangles = rounded.map.flipped_triangles;
-          state.igm_stats.degenerate_triangles = rounded.map.degenerate_triangles;
-          state.igm_stats.unresolved_equations = rounded.map.unresolved_equations;
-        }
-      } catch (const Error& e) {
-        rethrow_for_component(e, c, components_.size());
+      if (options_.quantizer == Quantizer::Greedy) {
+        state.quantization = quantize(*state.tmesh, options, progress);
+      } else {
+        // The rounding baseline: its rounded map is the integer-grid map (when it is valid).
+        options.method = QuantizationMethod::Round;
+        const TraceFunction trace = [&state](const ExactParametrization& param, Progress& p) {
+          TraceOptions trace_options;
+          trace_options.feature_edges = state.isoline_edges;
+          return trace_tmesh(state.mesh, param, trace_options, p);
+        };
+        RoundingResult rounded = quantize_by_rounding(state.mesh, state.seamless->param, state.isoline_edges,
+                                                      *state.tmesh, options, trace, progress);
+        if (!rounded.quantization.valid)
+          throw Error(ErrorCode::StageFailed, "quantization (round): " + rounded.quantization.invalid_reason);
+        state.quantization = std::move(rounded.quantization);
+        state.igm = std::move(rounded.map.param);
+        state.igm_stats = IgmStats{};
+        state.igm_stats.path = "round";
+        state.igm_stats.flipped_triangles = rounded.map.flipped_triangles;
+        state.igm_stats.degenerate_triangles = rounded.map.degenerate_triangles;
+        state.igm_stats.unresolved_equations = rounded.map.unresolved_equations;
       }
       state.quantization_scale = scale;
       state.quantizer = options_.quantizer;
     }
     quads += state.quantization->quads_expected;
     per_component.push_back(quantization_report(*state.quantization));
-  }
-  report_["timings_s"]["quantization"] = timer.seconds();
+  });
   report_["quantization"] = {{"method", quantizer_name(options_.quantizer)},
                              {"quads_expected", quads},
                              {"components", std::move(per_component)}};
 }
 
 void Session::run_igm_stage(Progress& progress) {
-  Timer timer;
-  progress.begin_stage("igm");
   Json per_component = Json::array();
   int flipped = 0, degenerate = 0, fallbacks = 0;
   double residual = 0;
-  for (size_t c = 0; c < components_.size(); ++c) {
-    ComponentState& state = components_[c];
-    set_component_range(c, progress);
+  for_each_component("igm", progress, [&](size_t, ComponentState& state) {
     if (!state.igm) {
       state.quads.reset();
       IgmOptions options;
       options.edge_length = state.seamless_edge_length;
-      try {
-        IntegerGridMap map = compute_integer_grid_map(state.mesh, *state.field, *state.cut, *state.seamless,
-                                                      *state.exact_seamless, *state.tmesh, *state.quantization,
-                                                      options, progress);
-        state.igm_stats = map.stats;
-        state.igm = std::move(map.param);
-      } catch (const Error& e) {
-        rethrow_for_component(e, c, components_.size());
-      }
+      IntegerGridMap map = compute_integer_grid_map(state.mesh, *state.field, *state.cut, *state.seamless,
+                                                    *state.exact_seamless, *state.tmesh, *state.quantization,
+                                                    options, progress);
+      state.igm_stats = map.stats;
+      state.igm = std::move(map.param);
     }
     const IgmStats& s = state.igm_stats;
     flipped += s.flipped_triangles;
@@ -397,8 +347,7 @@ void Session::run_igm_stage(Progress& progress) {
     fallbacks += s.fallback_used;
     residual = std::max(residual, s.max_integer_residual);
     per_component.push_back(igm_report(s));
-  }
-  report_["timings_s"]["igm"] = timer.seconds();
+  });
   report_["igm"] = {{"flipped_triangles", flipped},
                     {"degenerate_triangles", degenerate},
                     {"max_integer_residual", residual},
@@ -406,38 +355,40 @@ void Session::run_igm_stage(Progress& progress) {
                     {"components", std::move(per_component)}};
 }
 
+namespace {
+
+// Why a quad mesh is not a consistently oriented 2-manifold with Euler characteristic `euler`
+// ("" when it is).
+std::string quad_mesh_defects(const QuadTopology& t, int euler) {
+  std::string defects;
+  auto add = [&](int count, const char* what) {
+    if (count > 0) defects += (defects.empty() ? "" : "; ") + std::to_string(count) + " " + what;
+  };
+  add(t.non_manifold_edges, "non-manifold edge(s)");
+  add(t.inconsistent_edges, "inconsistently oriented edge(s)");
+  add(t.degenerate_quads, "degenerate quad(s)");
+  if (defects.empty() && t.euler_characteristic != euler)
+    defects = "Euler characteristic " + std::to_string(t.euler_characteristic) + " instead of " + std::to_string(euler);
+  return defects;
+}
+
+}  // namespace
+
 void Session::run_quad_stage(Progress& progress) {
-  Timer timer;
-  progress.begin_stage("quad_extraction");
   Json per_component = Json::array();
-  for (size_t c = 0; c < components_.size(); ++c) {
-    ComponentState& state = components_[c];
-    set_component_range(c, progress);
+  for_each_component("quad_extraction", progress, [&](size_t c, ComponentState& state) {
     if (!state.quads) {
-      try {
-        QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
-        // Never hand out a broken mesh: the quads must form a consistently oriented 2-manifold of
-        // the component's topology.
-        const QuadTopology t = quad_topology(extraction.quads);
-        const ComponentInfo& info = intake_->components[c];
-        std::string defect;
-        if (t.non_manifold_edges > 0) defect += std::to_string(t.non_manifold_edges) + " non-manifold edge(s); ";
-        if (t.inconsistent_edges > 0) defect += std::to_string(t.inconsistent_edges) + " inconsistently oriented edge(s); ";
-        if (t.degenerate_quads > 0) defect += std::to_string(t.degenerate_quads) + " degenerate quad(s); ";
-        if (defect.empty() && t.euler_characteristic != info.euler_characteristic)
-          defect = "Euler characteristic " + std::to_string(t.euler_characteristic) + " instead of " +
-                   std::to_string(info.euler_characteristic) + "; ";
-        if (!defect.empty())
-          throw Error(ErrorCode::StageFailed, "quad extraction: the quads do not form a valid mesh (" +
-                                                  defect.substr(0, defect.size() - 2) + "); no output was written");
-        state.quads = std::move(extraction);
-      } catch (const Error& e) {
-        rethrow_for_component(e, c, components_.size());
-      }
+      QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
+      // Never hand out a broken mesh.
+      const std::string defects =
+          quad_mesh_defects(quad_topology(extraction.quads), intake_->components[c].euler_characteristic);
+      if (!defects.empty())
+        throw Error(ErrorCode::StageFailed,
+                    "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written");
+      state.quads = std::move(extraction);
     }
     per_component.push_back(quad_extraction_stats_json(state.quads->stats));
-  }
-  report_["timings_s"]["quad_extraction"] = timer.seconds();
+  });
   report_["extraction"] = {{"components", std::move(per_component)}};
 }
 

@@ -89,8 +89,10 @@ class Session {
   void run_igm_stage(Progress& progress);
   void run_quad_stage(Progress& progress);
   void collect_results(Job job, Progress& progress);
-  // Calls progress.set_range for component c's share (by face count) of the current stage.
-  void set_component_range(size_t c, Progress& progress) const;
+  // Runs body(c, state) for every component inside progress stage `stage`, each with its share
+  // of the progress (by face count); records timings_s[stage]; a failure names the component.
+  template <class Body>
+  void for_each_component(const char* stage, Progress& progress, Body body);
 
   PolygonSoup input_;
   RemeshOptions options_;
