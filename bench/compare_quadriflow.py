@@ -71,15 +71,11 @@ def parse_args():
 
 
 def load_addon():
-    """This repository's add-on, registered (as addon/batch.py does)."""
-    addon_dir = os.path.join(REPO, "addon")
-    spec = importlib.util.spec_from_file_location("quantized_retopo", os.path.join(addon_dir, "__init__.py"),
-                                                  submodule_search_locations=[addon_dir])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["quantized_retopo"] = module
-    spec.loader.exec_module(module)
-    module.register()
-    return module
+    """This repository's add-on, registered by addon/batch.py's loader."""
+    spec = importlib.util.spec_from_file_location("qgp_batch", os.path.join(REPO, "addon", "batch.py"))
+    batch = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(batch)
+    return batch.load_addon()
 
 
 def read_input(binding, path):
