@@ -378,18 +378,52 @@ void Session::run_quad_stage(Progress& progress) {
   Json per_component = Json::array();
   for_each_component("quad_extraction", progress, [&](size_t c, ComponentState& state) {
     if (!state.quads) {
-      QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
-      // Never hand out a broken mesh.
-      const std::string defects =
-          quad_mesh_defects(quad_topology(extraction.quads), intake_->components[c].euler_characteristic);
-      if (!defects.empty())
-        throw Error(ErrorCode::StageFailed,
-                    "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written");
-      state.quads = std::move(extraction);
+      const int euler = intake_->components[c].euler_characteristic;
+      // The integer-grid map's quads when the map is valid; otherwise (or if they do not form a
+      // valid mesh) the quads of the quantized T-mesh layout.
+      std::string why_not_igm;
+      if (state.igm_stats.flipped_triangles + state.igm_stats.degenerate_triangles > 0) {
+        why_not_igm = std::to_string(state.igm_stats.flipped_triangles) + " flipped and " +
+                      std::to_string(state.igm_stats.degenerate_triangles) + " degenerate triangle(s) in the integer-grid map";
+      } else {
+        try {
+          QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
+          why_not_igm = quad_mesh_defects(quad_topology(extraction.quads), euler);
+          if (why_not_igm.empty()) {
+            state.quads = std::move(extraction);
+            state.quads_path = "integer-grid map";
+          }
+        } catch (const Error& e) {
+          if (e.code() != ErrorCode::StageFailed) throw;
+          why_not_igm = e.what();
+        }
+      }
+      if (!state.quads) {
+        LayoutQuads layout =
+            extract_layout_quads(state.mesh, *state.exact_seamless, *state.tmesh, state.quantization->x, progress);
+        // Never hand out a broken mesh.
+        const std::string defects = quad_mesh_defects(quad_topology(layout.quads), euler);
+        if (!defects.empty())
+          throw Error(ErrorCode::StageFailed, "quad extraction: the quads do not form a valid mesh (" + defects +
+                                                  "); no output was written");
+        QuadExtraction extraction;
+        extraction.quads = std::move(layout.quads);
+        extraction.stats.expected_quads = layout.stats.quads;
+        extraction.stats.seconds = layout.stats.seconds;
+        for (char s : extraction.quads.vertex_singular) extraction.stats.singular_vertices += s;
+        state.quads = std::move(extraction);
+        state.quads_path = "T-mesh layout (" + why_not_igm + ")";
+        state.layout_stats = layout.stats;
+      }
     }
-    per_component.push_back(quad_extraction_stats_json(state.quads->stats));
+    Json stats = quad_extraction_stats_json(state.quads->stats);
+    stats["path"] = state.quads_path;
+    if (state.quads_path.rfind("T-mesh", 0) == 0) stats["layout"] = layout_quads_stats_json(state.layout_stats);
+    per_component.push_back(std::move(stats));
   });
-  report_["extraction"] = {{"components", std::move(per_component)}};
+  int from_layout = 0;
+  for (const ComponentState& state : components_) from_layout += state.quads_path.rfind("T-mesh", 0) == 0;
+  report_["extraction"] = {{"layout_components", from_layout}, {"components", std::move(per_component)}};
 }
 
 void Session::collect_results(Job job, Progress& progress) {

@@ -14,6 +14,7 @@
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
+#include "quad_extraction/layout_quads.h"
 #include "quad_extraction/quad_extraction.h"
 #include "quantization/quantization.h"
 #include "seamless_map/seamless_map.h"
@@ -45,6 +46,8 @@ struct ComponentState {
   std::optional<ExactParametrization> igm;
   IgmStats igm_stats;                   // of the greedy path (path "round" for the baseline)
   std::optional<QuadExtraction> quads;
+  std::string quads_path;               // "integer-grid map" or "T-mesh layout (<why>)"
+  LayoutQuadsStats layout_stats;        // when the quads come from the T-mesh layout
 };
 
 class Session {
