@@ -561,7 +561,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
 
   // Escalation: the paper's penalty phase with re-linearized regularity constraints.
   if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity &&
-      !options.penalty_regularity) {
+      !options.penalty_regularity && options.escalate) {
     const IntegerGridMap first = result;
     const IgmStats first_stats = stats;
     const int before = stats.flipped_triangles + stats.degenerate_triangles;
@@ -582,7 +582,8 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
 
   // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
   // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
-  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity && options.allow_fallback) {
+  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity && options.allow_fallback &&
+      options.escalate) {
     Parametrization seamless_pose = seamless.param;
     seamless_pose.uv *= scale;
     so.regularity = RegularityMode::AllFaces;

@@ -55,6 +55,9 @@ struct IgmOptions {
   // When the exact map has flipped/degenerate triangles: hard solve again with all triangles
   // under tri-sector constraints around the seamless map (not yet the paper's §7.1.1 per-cell map).
   bool allow_fallback = true;
+  // false: stop after the first attempt (the caller has its own fallback, e.g. quads straight from
+  // the T-mesh layout); the escalations can cost minutes on large meshes.
+  bool escalate = true;
 };
 
 struct IgmStats {

@@ -198,7 +198,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   run_seamless_stage(progress);
   run_tmesh_stage(progress);
   run_quantization_stage(progress);
-  run_igm_stage(progress);
+  run_igm_stage(job, progress);
   if (job == Job::Remesh) run_quad_stage(progress);
   collect_results(job, progress);
 }
@@ -326,14 +326,20 @@ void Session::run_quantization_stage(Progress& progress) {
                              {"components", std::move(per_component)}};
 }
 
-void Session::run_igm_stage(Progress& progress) {
+void Session::run_igm_stage(Job job, Progress& progress) {
   Json per_component = Json::array();
   int flipped = 0, degenerate = 0, fallbacks = 0;
   double residual = 0;
+  // Quads have a fallback (the T-mesh layout), grid UVs do not: only they pay for the escalations.
+  const bool escalate = job == Job::GridUV;
   for_each_component("igm", progress, [&](size_t, ComponentState& state) {
+    const bool irregular = state.igm_stats.flipped_triangles + state.igm_stats.degenerate_triangles > 0;
+    if (state.igm && escalate && !state.igm_escalated && irregular && state.igm_stats.path != "round") state.igm.reset();
     if (!state.igm) {
       state.quads.reset();
       IgmOptions options;
+      options.escalate = escalate;
+      state.igm_escalated = escalate;
       options.edge_length = state.seamless_edge_length;
       IntegerGridMap map = compute_integer_grid_map(state.mesh, *state.field, *state.cut, *state.seamless,
                                                     *state.exact_seamless, *state.tmesh, *state.quantization,
@@ -424,6 +430,10 @@ void Session::run_quad_stage(Progress& progress) {
   int from_layout = 0;
   for (const ComponentState& state : components_) from_layout += state.quads_path.rfind("T-mesh", 0) == 0;
   report_["extraction"] = {{"layout_components", from_layout}, {"components", std::move(per_component)}};
+  if (from_layout > 0) {
+    report_["igm"]["fallback_used"] = true;
+    report_["igm"]["fallback"] = "quads of the T-mesh layout in " + std::to_string(from_layout) + " component(s)";
+  }
 }
 
 void Session::collect_results(Job job, Progress& progress) {

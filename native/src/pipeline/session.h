@@ -45,6 +45,7 @@ struct ComponentState {
   // Stage 4: the integer-grid map (1 unit = 1 quad) and stage 5: its quads.
   std::optional<ExactParametrization> igm;
   IgmStats igm_stats;                   // of the greedy path (path "round" for the baseline)
+  bool igm_escalated = false;           // computed with IgmOptions::escalate (grid UV jobs)
   std::optional<QuadExtraction> quads;
   std::string quads_path;               // "integer-grid map" or "T-mesh layout (<why>)"
   LayoutQuadsStats layout_stats;        // when the quads come from the T-mesh layout
@@ -89,7 +90,7 @@ class Session {
   void run_seamless_stage(Progress& progress);
   void run_tmesh_stage(Progress& progress);
   void run_quantization_stage(Progress& progress);
-  void run_igm_stage(Progress& progress);
+  void run_igm_stage(Job job, Progress& progress);
   void run_quad_stage(Progress& progress);
   void collect_results(Job job, Progress& progress);
   // Runs body(c, state) for every component inside progress stage `stage`, each with its share
