@@ -247,7 +247,7 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
 // StageFailed error that leaves no result behind.
 std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>& meshes, std::vector<double> targets) {
   std::cout << "mesh | sharp | target | quads | irregular | min scaled Jacobian | mean angle dev | Hausdorff | "
-               "field..tmesh s | quantization s | igm s | extraction s" << std::endl;
+               "field..tmesh s | quantization s | igm s | extraction s | quads from" << std::endl;
   std::vector<std::string> failed;
   for (const auto& [name, sharp] : meshes) {
     Session session(read_mesh_file(test::mesh_path(name)));
@@ -273,7 +273,8 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
       std::cout << name << " | " << sharp << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices
                 << " | " << m.quad.min_scaled_jacobian << " | " << m.quad.mean_angle_deviation << " | "
                 << m.quad.hausdorff << " | " << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh")
-                << " | " << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << std::endl;
+                << " | " << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << " | "
+                << session.report()["extraction"]["components"][0].value("path", "") << std::endl;
     }
   }
   return failed;
@@ -292,6 +293,17 @@ TEST(SessionMeshes, OrganicMeshesBecomeValidQuadMeshesAtThreeDensities) {
       {"spot.obj", -1}, {"bunny.off", -1}, {"torus.obj", -1}, {"kitten.obj", -1},
       {"rocker-arm.obj", -1}, {"joint_rem_p.obj", -1}};
   const std::vector<std::string> failed = sweep(meshes, {500, 2000, 8000});
+  EXPECT_TRUE(failed.empty()) << joined(failed);
+}
+
+// More shapes at 2000 quads (CAD without features, open, higher genus, scans): the integer-grid
+// map's quads or, where that map keeps a flip, the T-mesh layout's; the output invariants hold.
+TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
+  const std::vector<std::pair<std::string, double>> meshes = {
+      {"block.obj", -1},   {"fandisk.obj", -1}, {"fertility.off", -1},  {"beetle.off", -1},
+      {"wingnut.obj", -1}, {"face.obj", -1},    {"decimated-max.obj", -1}, {"mnf07HeadFem_rem_rem_p.obj", -1},
+      {"wingnut.obj", 40}};
+  const std::vector<std::string> failed = sweep(meshes, {2000});
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
