@@ -2,9 +2,10 @@
 // T-meshes (torus grids, planar rectangles with boundary, polycubes with many singularities),
 // randomly split into T-junction-rich layouts. Prints a table; never fails on timing.
 //
-//   quantization_bench [max_edges [family [fine_limit]]]
+//   quantization_bench [max_edges [family [fine_limit [min_edges]]]]
 // max_edges (default 120000): largest T-mesh; family: torus | planar | polycube (default all);
-// fine_limit (default 40000): T-meshes above this many edges run the coarse density only.
+// fine_limit (default 40000): T-meshes above this many edges run the coarse density only;
+// min_edges (default 0): skip smaller T-meshes.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -49,13 +50,15 @@ int main(int argc, char** argv) {
   const int max_edges = argc > 1 ? std::atoi(argv[1]) : 120000;
   const std::string only = argc > 2 ? argv[2] : "";
   const int fine_limit = argc > 3 ? std::atoi(argv[3]) : 40000;
+  const int min_edges = argc > 4 ? std::atoi(argv[4]) : 0;
   std::printf("%-8s %8s %7s %5s %8s | %6s %7s %6s %7s %9s %8s %7s | %7s %7s %7s\n", "family", "edges", "cells", "sing",
               "quads", "st1", "st2", "rej", "zero", "objective", "searches", "checks", "st1 s", "st2 s", "total s");
   for (const std::string family : {"torus", "planar", "polycube"}) {
     if (!only.empty() && family != only) continue;
-    for (int splits : {300, 1000, 3000, 10000, 35000}) {
+    for (int splits : {300, 1000, 3000, 10000, 35000, 40000}) {
       const TMesh tm = make(family, splits, 1);
       if (static_cast<int>(tm.edges.size()) > max_edges) break;
+      if (static_cast<int>(tm.edges.size()) < min_edges) continue;
       int singular = 0;
       for (const auto& n : tm.nodes) singular += n.singular();
       for (double quads_per_cell : {1.0, 10.0}) {
