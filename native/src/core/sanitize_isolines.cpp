@@ -54,6 +54,76 @@ std::pair<int, int> rotated_component(int r, int axis) {
   }
 }
 
+// Rounding to the grid flips or collapses triangles whose height in the continuous map is below
+// a few grid units (e.g. slivers of the input surface, mapped faithfully). Such a face is made
+// positively oriented by moving one of its corners' wedges to a nearby grid point, provided the
+// wedge is movable (no equation involves it, so every other value stays as it is) and the move
+// keeps every positive face around it positive. All decisions are exact orientation tests;
+// kMaxMove only bounds the search (in grid units, far below any parameter-space feature size).
+void reorient_faces(const TriMesh& mesh, const std::vector<int>& wedge_of, const std::vector<char>& movable,
+                    std::vector<IVec2>& uv, SanitizeResult& result) {
+  const int nf = mesh.num_faces();
+  auto positive = [&](int f) { return orient2d_exact(uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]) > 0; };
+  std::vector<int> bad;
+  for (int f = 0; f < nf; ++f)
+    if (!positive(f)) bad.push_back(f);
+  if (bad.empty()) return;
+
+  // Corners of each wedge (CSR).
+  const int nw = static_cast<int>(movable.size());
+  std::vector<int> start(nw + 1, 0), corners(wedge_of.size());
+  for (int w : wedge_of) ++start[w + 1];
+  for (int w = 0; w < nw; ++w) start[w + 1] += start[w];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (size_t c = 0; c < wedge_of.size(); ++c) corners[fill[wedge_of[c]]++] = static_cast<int>(c);
+
+  // Grid offsets by increasing distance (ties in a fixed order).
+  constexpr int kMaxMove = 16;
+  std::vector<IVec2> offsets;
+  for (int64_t dx = -kMaxMove; dx <= kMaxMove; ++dx)
+    for (int64_t dy = -kMaxMove; dy <= kMaxMove; ++dy)
+      if (dx != 0 || dy != 0) offsets.push_back({dx, dy});
+  std::stable_sort(offsets.begin(), offsets.end(), [](const IVec2& a, const IVec2& b) {
+    return a[0] * a[0] + a[1] * a[1] < b[0] * b[0] + b[1] * b[1];
+  });
+
+  // Moves wedge w so that face target becomes positive and no positive face of its star stops
+  // being positive; returns whether such a grid point exists.
+  std::vector<char> was_positive;
+  auto move_wedge = [&](int w, int target) {
+    const IVec2 base = uv[corners[start[w]]];
+    was_positive.resize(start[w + 1] - start[w]);
+    for (int i = start[w]; i < start[w + 1]; ++i) was_positive[i - start[w]] = positive(corners[i] / 3);
+    for (const IVec2& d : offsets) {
+      const IVec2 p = {base[0] + d[0], base[1] + d[1]};
+      for (int i = start[w]; i < start[w + 1]; ++i) uv[corners[i]] = p;
+      bool ok = positive(target);
+      for (int i = start[w]; ok && i < start[w + 1]; ++i)
+        ok = !was_positive[i - start[w]] || positive(corners[i] / 3);
+      if (ok) return true;
+    }
+    for (int i = start[w]; i < start[w + 1]; ++i) uv[corners[i]] = base;
+    return false;
+  };
+
+  const size_t initially = bad.size();
+  for (bool changed = true; changed && !bad.empty();) {
+    changed = false;
+    std::vector<int> still;
+    for (int f : bad) {
+      if (positive(f)) continue;  // fixed by a move for another face
+      bool fixed = false;
+      for (int k = 0; k < 3 && !fixed; ++k)
+        if (movable[wedge_of[3 * f + k]]) fixed = move_wedge(wedge_of[3 * f + k], f);
+      if (fixed) changed = true;
+      else still.push_back(f);
+    }
+    bad.swap(still);
+  }
+  result.non_positive_faces = static_cast<int>(bad.size());
+  result.reoriented_faces = static_cast<int>(initially - bad.size());
+}
+
 }  // namespace
 
 std::vector<IsolineConstraint> isoline_constraints(const TriMesh& mesh, const Parametrization& param,
@@ -155,6 +225,9 @@ SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization
 
   // Elimination with unit pivots; definition[x] expresses x by variables free at that time.
   const int nvars = static_cast<int>(value.size());
+  std::vector<char> in_equation(nvars, 0);  // unknowns that occur in some equation
+  for (const Expr& eq : equations)
+    for (const auto& term : eq) in_equation[term.first] = 1;
   std::vector<Expr> definition(nvars);
   std::vector<char> eliminated(nvars, 0);
   std::vector<int> order;
@@ -215,11 +288,14 @@ SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization
     exact[*it] = sum;
   }
   ex.uv.resize(nc);
-  for (int c = 0; c < nc; ++c) {
-    ex.uv[c] = {exact[2 * wedge_of[c]], exact[2 * wedge_of[c] + 1]};
+  for (int c = 0; c < nc; ++c) ex.uv[c] = {exact[2 * wedge_of[c]], exact[2 * wedge_of[c] + 1]};
+  std::vector<char> movable(nw, 0);  // wedges no equation and no snapping ties to anything else
+  for (int w = 0; w < nw; ++w)
+    movable[w] = !in_equation[2 * w] && !in_equation[2 * w + 1] && !snapped[2 * w] && !snapped[2 * w + 1];
+  reorient_faces(mesh, wedge_of, movable, ex.uv, result);
+  for (int c = 0; c < nc; ++c)
     for (int a = 0; a < 2; ++a)
       result.max_change = std::max(result.max_change, std::fabs(ex.uv[c][a] / scale - param.uv(c, a)));
-  }
   ex.rotation = param.rotation;
   ex.translation.assign(nc, {0, 0});
   ex.is_cut.assign(mesh.num_edges(), 0);
