@@ -150,6 +150,20 @@ TEST(SanitizeIsolines, SliverBelowTheGridStaysPositivelyOriented) {
   EXPECT_LE(r.max_change, 16.0 / 16);
 }
 
+TEST(SanitizeIsolines, SliverCornerOnAnIsolineMovesAlongIt) {
+  // A B is a v-isoline and C E a u-isoline: C is tied to E, yet its v is free to move.
+  const SliverPatch s = sliver_patch();
+  SanitizeOptions options;
+  options.fraction_bits = 4;
+  const std::vector<IsolineConstraint> iso = {{0, 1}, {7, 0}};  // A->B (face 0), C->E (face 2)
+  const SanitizeResult r = sanitize_with_isolines(s.mesh, s.param, iso, options);
+  EXPECT_EQ(r.unresolved_equations, 0);
+  EXPECT_EQ(r.non_positive_faces, 0);
+  EXPECT_GE(r.reoriented_faces, 1);
+  EXPECT_TRUE(all_positive(s.mesh, r.param));
+  EXPECT_EQ(non_isolines(s.mesh, r.param, iso), 0);
+}
+
 TEST(SanitizeIsolines, SliverPinnedByIsolinesIsReportedNotMoved) {
   // A C and A B as v-isolines put all three corners of the sliver on one line: no corner may move.
   const SliverPatch s = sliver_patch();
