@@ -87,8 +87,9 @@ struct SanitizeResult {
   ExactParametrization param;
   double max_change = 0;        // largest |exact - continuous| over all corners (uv units)
   int unresolved_equations = 0; // transition equations that could not be satisfied (0 expected)
-  // sanitize_with_isolines only: faces whose rounded corners were not positively oriented and
-  // that moving a free vertex on the grid made positive, and faces still not positive after that.
+  // sanitize_with_isolines only, of the faces positive in the continuous map: those whose rounded
+  // corners were not positively oriented and that moving free unknowns on the grid made positive,
+  // and those still not positive after that (0 expected).
   int reoriented_faces = 0;
   int non_positive_faces = 0;
 };

@@ -61,12 +61,12 @@ std::pair<int, int> rotated_component(int r, int axis) {
 // keeps every positive face around it positive. All decisions are exact orientation tests;
 // kMaxMove only bounds the search (in grid units, far below any parameter-space feature size).
 void reorient_faces(const TriMesh& mesh, const std::vector<int>& wedge_of, const std::vector<char>& movable,
-                    std::vector<IVec2>& uv, SanitizeResult& result) {
+                    const std::vector<char>& target, std::vector<IVec2>& uv, SanitizeResult& result) {
   const int nf = mesh.num_faces();
   auto positive = [&](int f) { return orient2d_exact(uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]) > 0; };
   std::vector<int> bad;
   for (int f = 0; f < nf; ++f)
-    if (!positive(f)) bad.push_back(f);
+    if (target[f] && !positive(f)) bad.push_back(f);
   if (bad.empty()) return;
 
   // Corners of each wedge (CSR).
@@ -334,7 +334,14 @@ SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization
   std::vector<char> movable(nw, 0);  // wedges no equation and no snapping ties to anything else
   for (int w = 0; w < nw; ++w)
     movable[w] = !in_equation[2 * w] && !in_equation[2 * w + 1] && !snapped[2 * w] && !snapped[2 * w + 1];
-  reorient_faces(mesh, wedge_of, movable, ex.uv, result);
+  // Faces to keep positive: those positive in the continuous map (flips there are the solver's
+  // to report; this only limits the search, every outcome is decided by exact tests).
+  std::vector<char> target(nf, 0);
+  for (int f = 0; f < nf; ++f) {
+    const Vec2 a = param.corner(f, 0), b = param.corner(f, 1), c = param.corner(f, 2);
+    target[f] = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() > 0;
+  }
+  reorient_faces(mesh, wedge_of, movable, target, ex.uv, result);
   if (result.non_positive_faces > 0) {
     // Faces still not positive have a corner tied to others by equations (cuts, isolines). Move
     // one unsnapped free unknown the corner depends on, together with everything that depends on
@@ -348,7 +355,7 @@ SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization
     std::vector<char> seen(nvars, 0);
     int fixed = 0, still = 0;
     for (int f = 0; f < nf; ++f) {
-      if (positive(f)) continue;
+      if (!target[f] || positive(f)) continue;
       // Free unknowns the face's corners depend on.
       std::vector<int> stack, candidates, touched;
       for (int j = 0; j < 3; ++j)
