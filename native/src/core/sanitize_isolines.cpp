@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <climits>
 #include <cstdlib>
 #include <numeric>
 
@@ -265,11 +266,14 @@ SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization
     // unknown of smallest |coefficient| c_m, x_m = y - sum_j q_j x_j (y a new free unknown,
     // q_j = c_j / c_m rounded) leaves coefficients c_j - q_j c_m of magnitude <= |c_m| / 2, not
     // all zero as their gcd is 1; repeated, a unit coefficient appears.
-    while (pivot < 0 && eq.size() >= 2) {
+    // Only unsnapped unknowns change, so the smallest unsnapped |coefficient| must drop every
+    // round; when it does not (the rest is snapped), the equation stays unresolved.
+    for (int64_t smallest = INT64_MAX; pivot < 0 && eq.size() >= 2;) {
       int m = -1;
       for (size_t i = 0; i < eq.size(); ++i)
         if (!snapped[eq[i].first] && (m < 0 || std::abs(eq[i].second) < std::abs(eq[m].second))) m = static_cast<int>(i);
-      if (m < 0) break;  // only snapped unknowns: no integer change of them keeps the snapping
+      if (m < 0 || std::abs(eq[m].second) >= smallest) break;
+      smallest = std::abs(eq[m].second);
       const auto [xm, cm] = eq[m];
       const int y = static_cast<int>(value.size());
       Expr def;  // x_m = y - sum_j q_j x_j
