@@ -110,5 +110,72 @@ TEST(SanitizeIsolines, WithoutConstraintsItIsAPlainSanitization) {
   EXPECT_LT(r.max_change, 1e-6);
 }
 
+// A planar patch whose map is its own xy: a sliver A B C (height 0.004) above A B, with D below
+// and E above it. On a grid of 1/16 the sliver's corners round onto one line.
+struct SliverPatch {
+  TriMesh mesh;
+  Parametrization param;
+};
+SliverPatch sliver_patch() {
+  SliverPatch s;
+  s.mesh.V.resize(5, 3);
+  s.mesh.V << 0, 0, 0, 1, 0, 0, 0.5, 0.004, 0, 0.5, -1, 0, 0.5, 1, 0;  // A B C D E
+  s.mesh.F.resize(4, 3);
+  s.mesh.F << 0, 1, 2, 0, 3, 1, 0, 2, 4, 2, 1, 4;
+  build_connectivity(s.mesh);
+  s.param.uv.resize(12, 2);
+  for (int c = 0; c < 12; ++c) s.param.uv.row(c) = s.mesh.V.row(s.mesh.F(c / 3, c % 3)).head<2>();
+  s.param.rotation.assign(12, 0);
+  s.param.is_cut.assign(s.mesh.num_edges(), 0);
+  return s;
+}
+
+bool all_positive(const TriMesh& mesh, const ExactParametrization& ex) {
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (orient2d_exact(ex.corner(f, 0), ex.corner(f, 1), ex.corner(f, 2)) <= 0) return false;
+  return true;
+}
+
+TEST(SanitizeIsolines, SliverBelowTheGridStaysPositivelyOriented) {
+  const SliverPatch s = sliver_patch();
+  SanitizeOptions options;
+  options.fraction_bits = 4;
+  // Rounding alone collapses the sliver...
+  EXPECT_FALSE(all_positive(s.mesh, sanitize_parametrization(s.mesh, s.param, options).param));
+  // ...the isoline sanitization moves a free corner by a few grid units instead.
+  const SanitizeResult r = sanitize_with_isolines(s.mesh, s.param, {}, options);
+  EXPECT_TRUE(all_positive(s.mesh, r.param));
+  EXPECT_GE(r.reoriented_faces, 1);
+  EXPECT_EQ(r.non_positive_faces, 0);
+  EXPECT_LE(r.max_change, 16.0 / 16);
+}
+
+TEST(SanitizeIsolines, SliverCornerOnAnIsolineMovesAlongIt) {
+  // A B is a v-isoline and C E a u-isoline: C is tied to E, yet its v is free to move.
+  const SliverPatch s = sliver_patch();
+  SanitizeOptions options;
+  options.fraction_bits = 4;
+  const std::vector<IsolineConstraint> iso = {{0, 1}, {7, 0}};  // A->B (face 0), C->E (face 2)
+  const SanitizeResult r = sanitize_with_isolines(s.mesh, s.param, iso, options);
+  EXPECT_EQ(r.unresolved_equations, 0);
+  EXPECT_EQ(r.non_positive_faces, 0);
+  EXPECT_GE(r.reoriented_faces, 1);
+  EXPECT_TRUE(all_positive(s.mesh, r.param));
+  EXPECT_EQ(non_isolines(s.mesh, r.param, iso), 0);
+}
+
+TEST(SanitizeIsolines, SliverPinnedByIsolinesIsReportedNotMoved) {
+  // A C and A B as v-isolines put all three corners of the sliver on one line: no corner may move.
+  const SliverPatch s = sliver_patch();
+  SanitizeOptions options;
+  options.fraction_bits = 4;
+  const std::vector<IsolineConstraint> iso = {{0, 1}, {2, 1}};  // halfedges A->B and C->A of face 0
+  const SanitizeResult r = sanitize_with_isolines(s.mesh, s.param, iso, options);
+  EXPECT_EQ(r.unresolved_equations, 0);
+  EXPECT_EQ(r.non_positive_faces, 1);
+  EXPECT_EQ(orient2d_exact(r.param.corner(0, 0), r.param.corner(0, 1), r.param.corner(0, 2)), 0);
+  EXPECT_EQ(r.param.corner(0, 0)[1], r.param.corner(0, 2)[1]);
+}
+
 }  // namespace
 }  // namespace qgp

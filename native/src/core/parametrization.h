@@ -87,6 +87,11 @@ struct SanitizeResult {
   ExactParametrization param;
   double max_change = 0;        // largest |exact - continuous| over all corners (uv units)
   int unresolved_equations = 0; // transition equations that could not be satisfied (0 expected)
+  // sanitize_with_isolines only, of the faces positive in the continuous map: those whose rounded
+  // corners were not positively oriented and that moving free unknowns on the grid made positive,
+  // and those still not positive after that (0 expected).
+  int reoriented_faces = 0;
+  int non_positive_faces = 0;
 };
 
 // Rounds a continuous seamless parametrization to the fixed-point grid such that every transition

@@ -27,7 +27,10 @@ std::vector<IsolineConstraint> isoline_constraints(const TriMesh& mesh, const Pa
 
 // As sanitize_parametrization (the same options: fraction bits, snapping), and every isoline
 // constraint holds exactly. unresolved_equations counts equations (transition or isoline) that
-// could not be satisfied with unit pivots (0 expected).
+// could not be satisfied exactly on the grid (0 expected). Faces positive in the continuous map
+// stay positively oriented (exact test): where rounding flips or collapses one (a triangle only a
+// few grid units high), free unknowns move by a few grid units (reoriented_faces; faces where no
+// such move exists are counted in non_positive_faces).
 SanitizeResult sanitize_with_isolines(const TriMesh& mesh, const Parametrization& param,
                                       const std::vector<IsolineConstraint>& isolines, const SanitizeOptions& options);
 
