@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libopenmesh-dev coinor-libipopt-dev libsuitesparse-dev libgmp-dev nlohmann-json3-dev
   libgtest-dev                         # tests
   blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
+  libopenblas0-serial                  # optimized BLAS for MUMPS (Ipopt) factorizations: about 2x faster
   patchelf zip unzip                   # extension packaging
 )
 
