@@ -288,6 +288,36 @@ TEST(SeamlessMap, ReproducesExactGridMaps) {
   }
 }
 
+TEST(SeamlessMap, WindingDefectsCountOneRingsAFullTurnOffTheirCone) {
+  auto cube = test::make_grid_cube(4);
+  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
+  const SeamlessMap c = run(cube.mesh, in, 1.0, "exact cube");
+  EXPECT_EQ(c.stats.winding_defects, 0);  // every one-ring winds as the field's cone
+  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.0);
+  // The exact cube map's own cones (3 quarter turns at the 8 corners, 4 elsewhere).
+  std::vector<double> angle(cube.mesh.num_vertices(), 0.0);
+  for (int f = 0; f < cube.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Vec2 a = cube.param.corner(f, (k + 1) % 3) - cube.param.corner(f, k);
+      const Vec2 b = cube.param.corner(f, (k + 2) % 3) - cube.param.corner(f, k);
+      angle[cube.mesh.F(f, k)] += std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    }
+  std::vector<int> cone(cube.mesh.num_vertices());
+  for (int v = 0; v < cube.mesh.num_vertices(); ++v) cone[v] = static_cast<int>(std::lround(angle[v] / (M_PI / 2)));
+  int corners = 0;
+  for (int k : cone) corners += k == 3;
+  EXPECT_EQ(corners, 8);
+  problem.set_cone_angles(cone);
+  EXPECT_EQ(problem.winding_defects(c.param), 0);
+  // Claim a cube corner were a valence-7 cone, and a flat vertex a valence-8 one: both are a full
+  // turn off what the map winds.
+  for (int v = 0, changed = 0; v < cube.mesh.num_vertices() && changed < 2; ++v)
+    if ((changed == 0 && cone[v] == 3) || (changed == 1 && cone[v] == 4)) cone[v] += 4, ++changed;
+  problem.set_cone_angles(cone);
+  EXPECT_EQ(problem.winding_defects(c.param), 2);
+  EXPECT_THROW(problem.set_cone_angles(std::vector<int>(3, 4)), Error);
+}
+
 TEST(SeamlessMap, DeformedSurfacesGiveValidMaps) {
   for (unsigned seed : {1u, 2u}) {
     auto cube = test::make_grid_cube(10);

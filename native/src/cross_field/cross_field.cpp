@@ -490,6 +490,15 @@ int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feat
 
 }  // namespace
 
+std::vector<int> cone_quarter_turns(const TriMesh& mesh, const CrossField& field) {
+  std::vector<int> cone(mesh.num_vertices(), 4);
+  for (int h = 0; h < mesh.num_halfedges(); ++h)
+    if (mesh.opposite[h] < 0) cone[mesh.from(h)] = cone[mesh.to(h)] = 2;
+  for (int v = 0; v < mesh.num_vertices() && v < static_cast<int>(field.vertex_index.size()); ++v)
+    cone[v] -= field.vertex_index[v];
+  return cone;
+}
+
 Vec3 rotate_in_face(const TriMesh& mesh, int f, const Vec3& d, int k) {
   const Vec3 n = mesh.face_normal_unnormalized(f).normalized();
   const Vec3 d90 = n.cross(d);

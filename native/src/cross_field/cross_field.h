@@ -111,6 +111,10 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
 // d (a tangent of face f) rotated by k quarter turns counter-clockwise about f's unit normal.
 Vec3 rotate_in_face(const TriMesh& mesh, int f, const Vec3& d, int k);
 
+// Cone angle of every vertex in quarter turns that a parametrization following the field has:
+// 4 - index inside, 2 - index on the boundary. #V.
+std::vector<int> cone_quarter_turns(const TriMesh& mesh, const CrossField& field);
+
 // Angle (radians, in (-pi, pi]) of the vector of halfedge h in the chart of face(h) whose +u axis
 // is u_axis (a unit tangent of that face).
 double chart_angle(const TriMesh& mesh, int h, const Vec3& u_axis);

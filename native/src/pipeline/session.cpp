@@ -224,6 +224,7 @@ void Session::run_seamless_stage(Progress& progress) {
     const SeamlessMapStats& s = state.seamless->stats;
     per_component.push_back({{"flipped_triangles", s.flipped_triangles},
                              {"degenerate_triangles", s.degenerate_triangles},
+                             {"winding_defects", s.winding_defects},
                              {"max_transition_residual", s.max_transition_residual},
                              {"energy", s.energy},
                              {"ipopt_iterations", s.ipopt_iterations},

@@ -176,6 +176,27 @@ void ParametrizationProblem::clear_linear_constraints() {
   system_.reset();
 }
 
+void ParametrizationProblem::set_cone_angles(std::vector<int> quarter_turns) {
+  if (!quarter_turns.empty() && static_cast<int>(quarter_turns.size()) != mesh_.num_vertices())
+    throw Error(ErrorCode::InvalidArgument, "parametrization: one cone angle per vertex expected");
+  cone_quarter_turns_ = std::move(quarter_turns);
+}
+
+int ParametrizationProblem::winding_defects(const Parametrization& param) const {
+  if (cone_quarter_turns_.empty()) return 0;
+  std::vector<double> angle(mesh_.num_vertices(), 0.0);
+  for (int c = 0; c < 3 * mesh_.num_faces(); ++c) {
+    const int f = c / 3;
+    const Vec2 p = param.corner(f, c % 3);
+    const Vec2 a = param.corner(f, (c + 1) % 3) - p, b = param.corner(f, (c + 2) % 3) - p;
+    angle[mesh_.F(f, c % 3)] += std::atan2(cross2(a, b), a.dot(b));
+  }
+  int defects = 0;
+  for (int v = 0; v < mesh_.num_vertices(); ++v)
+    defects += std::abs(angle[v] - cone_quarter_turns_[v] * M_PI / 2) > 1.5 * M_PI;  // a full turn off (with slack)
+  return defects;
+}
+
 void ParametrizationProblem::set_pin_translation(bool pin) {
   if (pin != pin_) system_.reset();
   pin_ = pin;
@@ -898,6 +919,7 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
   p.is_cut = is_cut_;
   st.flipped = current.flipped;
   st.degenerate = current.degenerate;
+  st.winding_defects = winding_defects(p);
   st.thin = current.thin;
   st.min_area_ratio = current.min_ratio;
   st.energy = field_energy(p);

@@ -71,6 +71,7 @@ struct ParametrizationSolveStats {
   int free_variables = 0;
   int flipped_initial = 0, degenerate_initial = 0, thin_initial = 0;  // equality-only optimum
   int flipped = 0, degenerate = 0, thin = 0;                          // final map
+  int winding_defects = 0;     // see ParametrizationProblem::winding_defects (final map)
   int forced_degenerate = 0;   // faces the hard constraints make degenerate (isolines)
   double min_area_ratio = 0;   // min over faces of parametric / ideal area
   double energy = 0;           // field energy of the final map (without penalty)
@@ -107,6 +108,12 @@ class ParametrizationProblem {
   // Pins one wedge at the origin (default on). Turn off when the linear constraints fix absolute
   // positions (e.g. a singularity at an integer point).
   void set_pin_translation(bool pin);
+  // Cone angle of every vertex in quarter turns (4 - index inside, 2 - index on the boundary, from
+  // the cross field); #V or empty (no check). Solutions then report their winding defects.
+  void set_cone_angles(std::vector<int> quarter_turns);
+  // Vertices whose one-ring winds at least a full turn off their cone angle in `param` (a flip-free
+  // map can do that: a valence-5 cone wound by 90 degrees). 0 without set_cone_angles.
+  int winding_defects(const Parametrization& param) const;
 
   ParametrizationSolution solve(const ParametrizationSolveOptions& options, Progress& progress);
 
@@ -139,6 +146,7 @@ class ParametrizationProblem {
   std::vector<char> is_cut_;  // #E, including rotated edges
   double edge_length_;
   bool pin_ = true;
+  std::vector<int> cone_quarter_turns_;  // #V expected cone angles, or empty
   std::vector<std::pair<int, int>> isolines_;  // (halfedge, axis)
   struct LinearConstraint {
     std::vector<CornerTerm> terms;

@@ -111,6 +111,8 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   }
   const int isolines = static_cast<int>(iso.isolines.size());
 
+  // The field's cone angles, for the map's winding check.
+  if (!field.vertex_index.empty()) problem->set_cone_angles(cone_quarter_turns(mesh, field));
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
@@ -122,6 +124,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   SeamlessMapStats& st = out.stats;
   st.flipped_triangles = s.flipped;
   st.degenerate_triangles = s.degenerate;
+  st.winding_defects = s.winding_defects;
   st.max_transition_residual = max_transition_residual(mesh, out.param);
   st.energy = s.energy;
   st.ipopt_iterations = s.ipopt_iterations;

@@ -19,6 +19,8 @@ struct SeamlessMapOptions {
 struct SeamlessMapStats {
   int flipped_triangles = 0;           // parametric area < 0 (exact sign)
   int degenerate_triangles = 0;        // parametric area == 0 (exact sign)
+  int winding_defects = 0;             // vertices whose one-ring winds by another angle than the
+                                       // field's cone (a full turn off; 0 expected)
   double max_transition_residual = 0;  // uv units
   double energy = 0;                   // field-guided energy (Bommes et al. 2009)
   int ipopt_iterations = 0;
