@@ -47,6 +47,16 @@ def load_addon():
     return module
 
 
+def new_object(name, vertices, faces):
+    """A mesh object linked to the scene from vertices ((n,3) array or list) and faces (index lists)."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices.tolist() if hasattr(vertices, "tolist") else vertices, [], faces)
+    mesh.update(calc_edges=True)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
 def import_mesh(binding, path):
     vertices, sizes, corners = binding.read_mesh_file(path)
     starts = [0]
@@ -54,13 +64,7 @@ def import_mesh(binding, path):
         starts.append(starts[-1] + n)
     flat = corners.tolist()
     faces = [flat[starts[i]:starts[i + 1]] for i in range(len(sizes))]
-    name = os.path.splitext(os.path.basename(path))[0]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist(), [], faces)
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    return obj
+    return new_object(os.path.splitext(os.path.basename(path))[0], vertices, faces)
 
 
 def activate(obj):

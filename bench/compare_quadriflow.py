@@ -70,11 +70,20 @@ def parse_args():
     return ap.parse_args(argv)
 
 
+def _load_batch():
+    spec = importlib.util.spec_from_file_location("qgp_batch", os.path.join(REPO, "addon", "batch.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# addon/batch.py: the add-on loader and the Blender object helpers shared with the batch command.
+batch = _load_batch()
+new_object, activate, write_obj = batch.new_object, batch.activate, batch.write_obj
+
+
 def load_addon():
     """This repository's add-on, registered by addon/batch.py's loader."""
-    spec = importlib.util.spec_from_file_location("qgp_batch", os.path.join(REPO, "addon", "batch.py"))
-    batch = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(batch)
     return batch.load_addon()
 
 
@@ -89,22 +98,6 @@ def read_input(binding, path):
         polygons.append(poly)
         triangles.extend([poly[0], poly[i], poly[i + 1]] for i in range(1, n - 1))
     return vertices, polygons, np.asarray(triangles, np.int32).reshape(-1, 3)
-
-
-def new_object(name, vertices, polygons):
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist() if hasattr(vertices, "tolist") else vertices, [], polygons)
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    return obj
-
-
-def activate(obj):
-    for other in bpy.context.selected_objects:
-        other.select_set(False)
-    obj.select_set(True)
-    bpy.context.view_layer.objects.active = obj
 
 
 def remove_object(obj):
@@ -227,17 +220,6 @@ class CapturedStdout:
 def measure(binding, result, ref_vertices, ref_triangles, sharp_angle):
     vertices, sizes, corners = mesh_polygons(result.data)
     return binding.measure_polygon_mesh(vertices, sizes, corners, ref_vertices, ref_triangles, sharp_angle)
-
-
-def write_obj(path, obj):
-    vertices, sizes, corners = mesh_polygons(obj.data)
-    with open(path, "w") as f:
-        for v in vertices:
-            f.write("v %.7g %.7g %.7g\n" % tuple(v))
-        start = 0
-        for n in sizes.tolist():
-            f.write("f " + " ".join(str(c + 1) for c in corners[start:start + n].tolist()) + "\n")
-            start += n
 
 
 def run_case(addon, binding, args, name, category, data, target, tool):

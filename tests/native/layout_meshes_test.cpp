@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -16,24 +15,6 @@
 
 namespace qgp {
 namespace {
-
-// Runs the remesh job up to (not including) the integer-grid map; returns the error message of a
-// failure before that point ("" when every stage up to quantization completed).
-std::string run_until_igm(Session& session) {
-  std::atomic<bool> cancel{false};
-  Progress progress(
-      [&](const std::string& stage, double) {
-        if (stage == "igm") cancel = true;
-      },
-      &cancel);
-  try {
-    session.run(Job::Remesh, progress);
-  } catch (const Error& e) {
-    if (e.code() == ErrorCode::Cancelled && cancel) return "";
-    return e.what();
-  }
-  return "igm stage did not start";
-}
 
 // Singular vertices of the field that are not T-mesh nodes (0 expected).
 int singularities_without_node(const CrossField& field, const TMesh& tmesh) {
@@ -147,7 +128,7 @@ void sweep_mesh(const std::string& name, double sharp_angle_deg, bool round_base
       options.quantizer = quantizer;
       options.sharp_angle_deg = sharp_angle_deg;
       session.set_options(options);
-      const std::string error = run_until_igm(session);
+      const std::string error = test::run_until_stage(session, "igm");
       if (quantizer == Quantizer::Round) {
         // The baseline: count how often direct rounding gives no valid quantization.
         ++counts.round_runs;

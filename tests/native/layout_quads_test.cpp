@@ -4,11 +4,9 @@
 // exactly quads_expected quads, irregular vertices only at singularities and no flipped quad.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cstdlib>
 #include <iostream>
 
-#include "core/error.h"
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 #include "quad_extraction/layout_quads.h"
@@ -17,26 +15,6 @@
 
 namespace qgp {
 namespace {
-
-// Runs the remesh job up to (not including) the integer-grid map; "" when quantization completed.
-std::string run_until_igm(Session& session) {
-  std::atomic<bool> cancel{false};
-  Progress progress([&](const std::string& stage, double) { cancel = cancel || stage == "igm"; }, &cancel);
-  try {
-    session.run(Job::Remesh, progress);
-  } catch (const Error& e) {
-    if (e.code() == ErrorCode::Cancelled && cancel) return "";
-    return e.what();
-  }
-  return "igm stage did not start";
-}
-
-PolygonSoup soup_of(const QuadMesh& quads) {
-  PolygonSoup soup;
-  for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());
-  for (int q = 0; q < quads.num_quads(); ++q) soup.add_face(quads.Q.row(q).data(), 4);
-  return soup;
-}
 
 // Known defects (named in the notes): collapses of the quantization that glue a cell's own corners
 // (degenerate quads, non-manifold edges) on these runs, and coarse quads whose straight diagonals
@@ -62,7 +40,7 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
       RemeshOptions options;
       options.target_faces = target;
       session.set_options(options);
-      const std::string error = run_until_igm(session);
+      const std::string error = test::run_until_stage(session, "igm");
       if (!error.empty()) {
         failed.push_back(name + ": " + error);
         break;
@@ -75,13 +53,7 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
             extract_layout_quads(state.mesh, *state.exact_seamless, *state.tmesh, state.quantization->x, progress);
         const QuadMesh& quads = layout.quads;
         EXPECT_EQ(quads.num_quads(), state.quantization->quads_expected) << where;
-        const PolygonMeshMetrics m = measure_polygon_mesh(soup_of(quads), state.mesh, -1, progress);
-        const QuadTopology topology = quad_topology(quads);
-        int irregular_off_singularity = 0;
-        for (int v = 0; v < quads.num_vertices(); ++v) {
-          const bool irregular = topology.on_boundary[v] ? topology.valence[v] != 3 : topology.valence[v] != 4;
-          irregular_off_singularity += irregular && !quads.vertex_singular[v];
-        }
+        const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(quads), state.mesh, -1, progress);
         std::cout << name << " | " << target << " | " << quads.num_quads() << " | " << layout.stats.collapsed_cells
                   << " | " << layout.stats.merged_points << " (walk failures " << layout.stats.walk_failures << ") | "
                   << m.quad.irregular_vertices << " | " << m.quad.flipped_quads << " | " << m.quad.min_scaled_jacobian
@@ -99,7 +71,7 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << where;
         EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << where;
         EXPECT_EQ(m.euler_characteristic, session.intake()->components[c].euler_characteristic) << where;
-        EXPECT_EQ(irregular_off_singularity, 0) << where;
+        EXPECT_EQ(test::irregular_vertices_off_singularities(quads), 0) << where;
       }
     }
   }

@@ -21,13 +21,6 @@
 namespace qgp {
 namespace {
 
-PolygonSoup soup_of(const QuadMesh& quads) {
-  PolygonSoup soup;
-  for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());
-  for (int q = 0; q < quads.num_quads(); ++q) soup.add_face(quads.Q.row(q).data(), 4);
-  return soup;
-}
-
 // Invariants of a successful remesh job's output; returns the measurements.
 PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& session, double sharp_angle) {
   const QuadMesh* quads = session.quad_result();
@@ -43,7 +36,7 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
     EXPECT_LT(f, session.input().num_faces()) << name;
   }
   Progress progress;
-  const PolygonMeshMetrics m = measure_polygon_mesh(soup_of(*quads), session.intake()->mesh, sharp_angle, progress);
+  const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, sharp_angle, progress);
   EXPECT_EQ(m.non_quads, 0) << name;
   EXPECT_EQ(m.non_manifold_edges, 0) << name;
   EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << name;
@@ -51,13 +44,7 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << name;
   EXPECT_EQ(m.quad.flipped_quads, 0) << name;
   // Irregular vertices only where the map is singular.
-  const QuadTopology topology = quad_topology(*quads);
-  int irregular_off_singularity = 0;
-  for (int v = 0; v < quads->num_vertices(); ++v) {
-    const bool irregular = topology.on_boundary[v] ? topology.valence[v] != 3 : topology.valence[v] != 4;
-    irregular_off_singularity += irregular && !quads->vertex_singular[v];
-  }
-  EXPECT_EQ(irregular_off_singularity, 0) << name;
+  EXPECT_EQ(test::irregular_vertices_off_singularities(*quads), 0) << name;
   EXPECT_EQ(report["quad"]["faces"], quads->num_quads()) << name;
   // Same topology as the input: Euler characteristic and number of boundary loops' presence.
   EXPECT_EQ(m.euler_characteristic, m.reference_euler_characteristic) << name;

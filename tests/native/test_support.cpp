@@ -1,16 +1,18 @@
 #include "test_support.h"
 
-#include <cstdlib>
-#include <sstream>
-
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 
+#include "core/error.h"
 #include "core/progress.h"
 #include "intake/read_mesh_file.h"
+#include "quad_extraction/quad_metrics.h"
 
 namespace qgp::test {
 
@@ -157,6 +159,35 @@ SyntheticParametrized make_grid_torus(int nu, int nv, double major_radius, doubl
   build_connectivity(out.mesh);
   infer_rotations(out.mesh, out.param);
   return out;
+}
+
+std::string run_until_stage(Session& session, const std::string& stage) {
+  std::atomic<bool> cancel{false};
+  Progress progress([&](const std::string& begun, double) { cancel = cancel || begun == stage; }, &cancel);
+  try {
+    session.run(Job::Remesh, progress);
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::Cancelled && cancel) return "";
+    return e.what();
+  }
+  return "stage '" + stage + "' did not start";
+}
+
+PolygonSoup polygon_soup(const QuadMesh& quads) {
+  PolygonSoup soup;
+  for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());
+  for (int q = 0; q < quads.num_quads(); ++q) soup.add_face(quads.Q.row(q).data(), 4);
+  return soup;
+}
+
+int irregular_vertices_off_singularities(const QuadMesh& quads) {
+  const QuadTopology topology = quad_topology(quads);
+  int count = 0;
+  for (int v = 0; v < quads.num_vertices(); ++v) {
+    const bool irregular = topology.on_boundary[v] ? topology.valence[v] != 3 : topology.valence[v] != 4;
+    count += irregular && !quads.vertex_singular[v];
+  }
+  return count;
 }
 
 }  // namespace qgp::test

@@ -6,7 +6,10 @@
 
 #include "core/mesh.h"
 #include "core/parametrization.h"
+#include "core/quad_mesh.h"
 #include "intake/intake.h"
+#include "intake/polygon_soup.h"
+#include "pipeline/session.h"
 
 namespace qgp::test {
 
@@ -44,5 +47,15 @@ SyntheticParametrized make_grid_torus(int nu, int nv, double major_radius = 3, d
 // Fills rotation[] (and is_cut) from per-corner uvs: the quarter turn that maps each edge's
 // vector in one chart to the other. Throws if an edge matches no rotation.
 void infer_rotations(const TriMesh& mesh, Parametrization& param);
+
+// Runs the session's remesh job until `stage` begins (cancelling it there); returns the error
+// message of a failure before that stage, "" when every earlier stage completed.
+std::string run_until_stage(Session& session, const std::string& stage);
+
+// The quads as a polygon soup (for measure_polygon_mesh).
+PolygonSoup polygon_soup(const QuadMesh& quads);
+
+// Irregular quad vertices (valence != 4 inside, != 3 on the boundary) not flagged vertex_singular.
+int irregular_vertices_off_singularities(const QuadMesh& quads);
 
 }  // namespace qgp::test

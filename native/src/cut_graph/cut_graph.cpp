@@ -7,26 +7,12 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/union_find.h"
 
 namespace qgp {
 namespace {
 
 int mod4(int x) { return ((x % 4) + 4) % 4; }
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  bool unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a == b) return false;
-    parent[a] = b;
-    return true;
-  }
-};
 
 // Vertex -> incident interior edges (compressed rows).
 struct InteriorAdjacency {
@@ -133,7 +119,7 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     if (region[a] != region[b]) candidates.push_back({dist[a] + edge_length(mesh, e) + dist[b], e});
   }
   std::sort(candidates.begin(), candidates.end());
-  UnionFind regions(num_terminals);
+  UnionFind<int> regions(num_terminals);
   for (const auto& [cost, e] : candidates) {
     const int h = mesh.edge_halfedge[e];
     if (regions.unite(region[mesh.from(h)], region[mesh.to(h)])) in_tree[e] = 1;
@@ -149,7 +135,7 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     dual_edges.push_back({dist[mesh.from(h)] + edge_length(mesh, e) + dist[mesh.to(h)], e});
   }
   std::sort(dual_edges.begin(), dual_edges.end(), std::greater<>());
-  UnionFind faces(nf);
+  UnionFind<int> faces(nf);
   std::vector<char> in_dual_tree(ne, 0);
   int dual_tree_edges = 0;
   for (const auto& [weight, e] : dual_edges) {

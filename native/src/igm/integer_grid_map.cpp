@@ -405,7 +405,6 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   // The problem at the quantization's scale: 1 uv unit = one quad edge.
   ParametrizationProblem problem(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
                                  options.edge_length / scale);
-  if (!field.vertex_index.empty()) problem.set_cone_angles(cone_quarter_turns(mesh, field));
   // The seamless map's isolines (it may have left a few more feature edges free).
   std::vector<char> left_free(mesh.num_edges(), 0);
   for (int e : seamless.stats.dropped_isoline_edges)

@@ -8,32 +8,17 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "core/union_find.h"
 #include "quad_extraction/surface_projection.h"
 
 namespace qgp {
 namespace {
 
-struct UnionFind {
-  std::vector<int64_t> parent;
-  explicit UnionFind(int64_t n) : parent(n) { std::iota(parent.begin(), parent.end(), int64_t(0)); }
-  int64_t find(int64_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  }
-  bool unite(int64_t a, int64_t b) {
-    a = find(a), b = find(b);
-    if (a == b) return false;
-    parent[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-};
-
 // A grid point before merging: where it is and whether it may move.
 struct GridPoint {
   Vec3 position = Vec3::Zero();
-  int face = -1;        // working-mesh triangle containing it (-1: find by projection)
   bool singular = false;
-  SurfacePoint point;   // where it lies in the map (face -1: unknown)
+  SurfacePoint point;   // where it lies in the map (face -1: unknown, found by projection)
   Vec2 along = Vec2::Zero();  // unit direction of its T-edge (from -> to) in point.face's chart
 };
 
@@ -109,8 +94,7 @@ void place_edge_points(const TriMesh& mesh, const TMesh& tm, int e, int64_t x, s
     GridPoint& p = out[k];
     if (x == 0 || !(total > 0) || trace.size() < 2) {
       const double t = x == 0 ? 0.0 : static_cast<double>(k) / static_cast<double>(x);
-      p.position = (1 - t) * a + t * b;
-      p.face = -1;  // found by projection
+      p.position = (1 - t) * a + t * b;  // point.face stays -1: found by projection
       continue;
     }
     const double target = total * static_cast<double>(k) / static_cast<double>(x);
@@ -121,16 +105,11 @@ void place_edge_points(const TriMesh& mesh, const TMesh& tm, int e, int64_t x, s
     const double length = cumulative[piece] - cumulative[piece - 1];
     const double w = length > 0 ? std::clamp((target - cumulative[piece - 1]) / length, 0.0, 1.0) : 0.0;
     p.position = (1 - w) * s.position(mesh) + w * t.position(mesh);
-    p.face = t.face;
     p.point.face = t.face;
     p.point.barycentric = (1 - w) * s.barycentric + w * t.barycentric;
     p.point.uv = (1 - w) * s.uv + w * t.uv;
     p.along = axis_direction(t.uv - s.uv);
   }
-  out.front().position = a;
-  out.back().position = b;
-  out.front().face = tm.nodes[edge.from].point.face;
-  out.back().face = tm.nodes[edge.to].point.face;
 }
 
 // The cell's boundary counter-clockwise (sides 0..3 in order) with each edge's direction in it.
@@ -203,7 +182,6 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   for (size_t n = 0; n < tm.nodes.size(); ++n) {
     const TMeshNode& node = tm.nodes[n];
     points[n].position = node.point.position(mesh);
-    points[n].face = node.point.face;
     points[n].singular = node.singular();
     points[n].point = node.point;
   }
@@ -215,7 +193,7 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   }
 
   // Cells: side point lists, collapses, inner points, quads.
-  UnionFind uf(count);
+  UnionFind<int64_t> uf(count);
   for (int e = 0; e < ne; ++e)
     if (x[e] == 0) uf.unite(tm.edges[e].from, tm.edges[e].to);
   std::vector<std::array<int64_t, 4>> quads;
@@ -276,8 +254,7 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
       throw Error(ErrorCode::InvalidArgument, "layout quads: more than " + std::to_string(max_quads) + " quads");
     const int64_t inner_first = static_cast<int64_t>(points.size());
     points.resize(points.size() + (w - 1) * (h - 1));
-    uf.parent.resize(points.size());
-    std::iota(uf.parent.begin() + inner_first, uf.parent.end(), inner_first);
+    uf.grow(static_cast<int64_t>(points.size()));
     auto id = [&](int64_t i, int64_t j) {
       return (i == 0 || j == 0 || i == w || j == h) ? boundary(i, j).id : inner_first + (j - 1) * (w - 1) + (i - 1);
     };
@@ -305,7 +282,6 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
         if (bottom.at->point.face >= 0 && bottom.along != Vec2::Zero() &&
             walk(mesh, seamless, bottom.at->point, v * up + du * bottom.along, found)) {
           g.point = found;
-          g.face = found.face;
           g.position = found.position(mesh);
           continue;
         }
@@ -314,7 +290,6 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
         g.position = (1 - t) * pos(i, 0) + t * pos(i, h) + (1 - s) * pos(0, j) + s * pos(w, j) -
                      ((1 - s) * (1 - t) * pos(0, 0) + s * (1 - t) * pos(w, 0) + (1 - s) * t * pos(0, h) +
                       s * t * pos(w, h));
-        g.face = -1;
       }
     for (int64_t j = 0; j < h; ++j)
       for (int64_t i = 0; i < w; ++i) quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
@@ -340,13 +315,12 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
     GridPoint& m = merged[v];
     m.position += points[p].position;
     m.singular = m.singular || points[p].singular;
-    if (m.face < 0) m.face = points[p].face;
     ++members[v];
   }
   result.stats.merged_points = static_cast<int>(total - static_cast<int64_t>(merged.size()));
   for (size_t v = 0; v < merged.size(); ++v) {
     merged[v].position /= members[v];
-    if (members[v] > 1) merged[v].face = -1;  // an average: project it
+    if (members[v] > 1) merged[v].point.face = -1;  // an average: project it
   }
 
   // Unused points (e.g. the nodes of a component without cells) are dropped.
@@ -363,7 +337,7 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   for (size_t v = 0; v < merged.size(); ++v) {
     if (used[v] < 0) continue;
     out.V.row(used[v]) = merged[v].position.transpose();
-    out.vertex_face[used[v]] = merged[v].face;
+    out.vertex_face[used[v]] = merged[v].point.face;
     out.vertex_singular[used[v]] = merged[v].singular;
   }
   for (size_t q = 0; q < quads.size(); ++q)
