@@ -20,7 +20,7 @@ namespace {
 // (degenerate quads, non-manifold edges) on these runs, and coarse quads whose straight diagonals
 // fold against the curved surface (thin, curved parts) on the second list.
 bool known_topology_defect(const std::string& name, double target) {
-  return name == "camelhead.off" || name == "nefertiti.obj" || (name == "fertility.off" && target == 500);
+  return name == "nefertiti.obj" || (name == "fertility.off" && target == 500);
 }
 bool known_flips(const std::string& name) {
   for (const char* n : {"armadillo.obj", "beetle.off", "camelhead.off", "fertility.off", "mnf07HeadFem_rem_rem_p.obj",

@@ -38,7 +38,8 @@ RotatedAxis rotated_axis(int r, int axis) {
   }
 }
 
-enum FaceState : char { kHealthy = 0, kThin = 1, kDegenerate = 2, kFlipped = 3, kForced = 4 };
+// kWound: positive, but around a vertex whose one-ring winds a full turn off its cone angle.
+enum FaceState : char { kHealthy = 0, kThin = 1, kDegenerate = 2, kFlipped = 3, kForced = 4, kWound = 5 };
 enum RepairStrategy { kUnfold = 0, kPropagated = 1, kOwnFit = 2, kAllElastic = 3 };
 
 }  // namespace
@@ -182,19 +183,26 @@ void ParametrizationProblem::set_cone_angles(std::vector<int> quarter_turns) {
   cone_quarter_turns_ = std::move(quarter_turns);
 }
 
-int ParametrizationProblem::winding_defects(const Parametrization& param) const {
-  if (cone_quarter_turns_.empty()) return 0;
+std::vector<int> ParametrizationProblem::winding_charges(const std::function<Vec2(int)>& corner) const {
+  if (cone_quarter_turns_.empty()) return {};
   std::vector<double> angle(mesh_.num_vertices(), 0.0);
   for (int c = 0; c < 3 * mesh_.num_faces(); ++c) {
     const int f = c / 3;
-    const Vec2 p = param.corner(f, c % 3);
-    const Vec2 a = param.corner(f, (c + 1) % 3) - p, b = param.corner(f, (c + 2) % 3) - p;
+    const Vec2 p = corner(c);
+    const Vec2 a = corner(3 * f + (c + 1) % 3) - p, b = corner(3 * f + (c + 2) % 3) - p;
     angle[mesh_.F(f, c % 3)] += std::atan2(cross2(a, b), a.dot(b));
   }
-  int defects = 0;
-  for (int v = 0; v < mesh_.num_vertices(); ++v)
-    defects += std::abs(angle[v] - cone_quarter_turns_[v] * M_PI / 2) > 1.5 * M_PI;  // a full turn off (with slack)
-  return defects;
+  std::vector<int> charge(mesh_.num_vertices(), 0);
+  for (int v = 0; v < mesh_.num_vertices(); ++v) {
+    const double off = angle[v] - cone_quarter_turns_[v] * M_PI / 2;
+    if (std::abs(off) > 1.5 * M_PI) charge[v] = static_cast<int>(std::lround(off / (2 * M_PI)));  // a full turn off (with slack)
+  }
+  return charge;
+}
+
+int ParametrizationProblem::winding_defects(const Parametrization& param) const {
+  const std::vector<int> charge = winding_charges([&](int c) { return param.corner(c / 3, c % 3); });
+  return static_cast<int>(std::count_if(charge.begin(), charge.end(), [](int q) { return q != 0; }));
 }
 
 void ParametrizationProblem::set_pin_translation(bool pin) {
@@ -464,42 +472,6 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
     if (s == 0) return kDegenerate;
     return area < options.min_area_ratio * ideal_area_[f] ? kThin : kHealthy;
   };
-  struct Census {
-    std::vector<char> state;
-    int flipped = 0, degenerate = 0, thin = 0, forced = 0;
-    double min_ratio = 0;
-    double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
-    int bad() const { return flipped + degenerate + thin; }
-  };
-  auto census = [&](const Eigen::VectorXd& x) {
-    Census cs;
-    cs.state.resize(nf);
-    cs.min_ratio = std::numeric_limits<double>::infinity();
-    for (int f = 0; f < nf; ++f) {
-      double ratio = 0;
-      cs.state[f] = classify_face(x, f, &ratio);
-      cs.min_ratio = std::min(cs.min_ratio, ratio);
-      cs.flipped += cs.state[f] == kFlipped;
-      cs.degenerate += cs.state[f] == kDegenerate || cs.state[f] == kForced;
-      cs.forced += cs.state[f] == kForced;
-      cs.thin += cs.state[f] == kThin;
-      if (cs.state[f] != kHealthy && cs.state[f] != kForced) cs.depth += std::max(0.0, options.min_area_ratio - ratio);
-    }
-    return cs;
-  };
-
-  Census current = census(z);
-  {
-    Parametrization initial;
-    initial.uv.resize(nc, 2);
-    for (int c = 0; c < nc; ++c) initial.uv.row(c) = ev.corner(z, c).transpose();
-    st.energy_initial = field_energy(initial);
-  }
-  st.flipped_initial = current.flipped;
-  st.degenerate_initial = current.degenerate;
-  st.thin_initial = current.thin;
-  st.forced_degenerate = current.forced;
-
   // Vertex -> faces for region growth.
   std::vector<int> vf_start(mesh_.num_vertices() + 1, 0), vf;
   for (int c = 0; c < nc; ++c) ++vf_start[mesh_.F(c / 3, c % 3) + 1];
@@ -524,6 +496,105 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
       frontier.swap(next);
     }
   };
+
+  struct Census {
+    std::vector<char> state;
+    std::vector<char> wound;  // #F: in a region around wound vertices (see mark_wound)
+    int flipped = 0, degenerate = 0, thin = 0, forced = 0, wound_faces = 0;
+    bool field_frame = false;  // every bad face's reference is its ideal shape in the field's frame
+    double min_ratio = 0;
+    double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
+    int bad() const { return flipped + degenerate + thin + wound_faces; }
+    int folded() const { return flipped + degenerate + thin; }
+    // Fewer folded faces first, then fewer wound faces (unwinding needs the folds gone).
+    bool fewer_bad(const Census& o) const {
+      return folded() < o.folded() || (folded() == o.folded() && wound_faces < o.wound_faces);
+    }
+  };
+  // A flip-free map can still wind a one-ring a full turn off its cone (a valence-5 cone wound by
+  // 90 degrees); the quads would then have a wrong irregular vertex there. Such vertices, with
+  // rings around them until each cluster's turns cancel (up to 8 rings), become bad faces whose
+  // references follow the field (never their own wound pose).
+  auto mark_wound = [&](const Eigen::VectorXd& x, Census& cs) {
+    cs.wound.assign(nf, 0);
+    if (cone_quarter_turns_.empty()) return;
+    const std::vector<int> charge = winding_charges([&](int c) { return ev.corner(x, c); });
+    std::vector<int> defects;
+    for (int v = 0; v < mesh_.num_vertices(); ++v) {
+      if (charge[v] == 0 || vf_start[v] == vf_start[v + 1]) continue;
+      bool clean = true;  // angles next to flipped faces say little; the global pass handles those
+      for (int i = vf_start[v]; i < vf_start[v + 1] && clean; ++i)
+        clean = cs.state[vf[i]] == kHealthy || cs.state[vf[i]] == kThin;
+      if (clean) defects.push_back(v);
+    }
+    if (defects.empty()) return;
+    std::vector<char> region(nf, 0);
+    for (int v : defects)
+      for (int i = vf_start[v]; i < vf_start[v + 1]; ++i) region[vf[i]] = 1;
+    dilate(region, 1);
+    for (int grow = 0; grow < 8; ++grow) {
+      // Connected parts of the region (faces sharing a vertex) and their total turns.
+      std::vector<int> part(nf, -1), turns;
+      for (int f0 = 0; f0 < nf; ++f0) {
+        if (!region[f0] || part[f0] >= 0) continue;
+        const int id = static_cast<int>(turns.size());
+        turns.push_back(0);
+        std::vector<int> stack{f0};
+        part[f0] = id;
+        while (!stack.empty()) {
+          const int f = stack.back();
+          stack.pop_back();
+          for (int k = 0; k < 3; ++k) {
+            const int v = mesh_.F(f, k);
+            for (int i = vf_start[v]; i < vf_start[v + 1]; ++i)
+              if (region[vf[i]] && part[vf[i]] < 0) part[vf[i]] = id, stack.push_back(vf[i]);
+          }
+        }
+      }
+      for (int v : defects) turns[part[vf[vf_start[v]]]] += charge[v];
+      std::vector<char> seed(nf, 0);
+      bool any = false;
+      for (int f = 0; f < nf; ++f)
+        if (region[f] && turns[part[f]] != 0) seed[f] = 1, any = true;
+      if (!any) break;
+      dilate(seed, 1);
+      for (int f = 0; f < nf; ++f) region[f] = region[f] || seed[f];
+    }
+    for (int f = 0; f < nf; ++f) {
+      if (!region[f] || cs.state[f] == kForced) continue;
+      cs.wound[f] = 1;
+      if (cs.state[f] == kHealthy) cs.state[f] = kWound, ++cs.wound_faces;
+    }
+  };
+  auto census = [&](const Eigen::VectorXd& x) {
+    Census cs;
+    cs.state.resize(nf);
+    cs.min_ratio = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < nf; ++f) {
+      double ratio = 0;
+      cs.state[f] = classify_face(x, f, &ratio);
+      cs.min_ratio = std::min(cs.min_ratio, ratio);
+      cs.flipped += cs.state[f] == kFlipped;
+      cs.degenerate += cs.state[f] == kDegenerate || cs.state[f] == kForced;
+      cs.forced += cs.state[f] == kForced;
+      cs.thin += cs.state[f] == kThin;
+      if (cs.state[f] != kHealthy && cs.state[f] != kForced) cs.depth += std::max(0.0, options.min_area_ratio - ratio);
+    }
+    mark_wound(x, cs);
+    return cs;
+  };
+
+  Census current = census(z);
+  {
+    Parametrization initial;
+    initial.uv.resize(nc, 2);
+    for (int c = 0; c < nc; ++c) initial.uv.row(c) = ev.corner(z, c).transpose();
+    st.energy_initial = field_energy(initial);
+  }
+  st.flipped_initial = current.flipped;
+  st.degenerate_initial = current.degenerate;
+  st.thin_initial = current.thin;
+  st.forced_degenerate = current.forced;
 
   // Faces with isoline edges: the rotation (relative to the field) that puts the ideal isoline
   // edges exactly on their axes (unit vector; zero for other faces).
@@ -596,15 +667,23 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
       std::vector<int> layer;
       for (int f : faces)
         if (cs.state[f] != kHealthy) {
-          // An isoline edge fixes the rotation: its direction is exactly an axis.
+          // An isoline edge fixes the rotation: its direction is exactly an axis. Wound faces
+          // always take their rotation from the healthy faces around their cluster.
+          if (cs.field_frame) {
+            ref_rotation[f] = pinned_rotation[f].squaredNorm() > 0 ? pinned_rotation[f] : Vec2(1, 0);
+            assigned[f] = 1;
+            continue;
+          }
+          const bool propagate = follow_neighbours || cs.wound[f];
           if (pinned_rotation[f].squaredNorm() > 0) {
             ref_rotation[f] = pinned_rotation[f];
             assigned[f] = 1;
           } else {
             ref_rotation[f] = best_fit(f);
+            assigned[f] = !propagate;
           }
-          if (!follow_neighbours) continue;
-          if (assigned[f]) layer.push_back(f);
+          if (!propagate) continue;
+          if (pinned_rotation[f].squaredNorm() > 0) layer.push_back(f);
           for (int k = 0; k < 3; ++k) {
             const int o = mesh_.opposite[3 * f + k];
             if (o >= 0 && cs.state[o / 3] == kHealthy && !assigned[o / 3]) {
@@ -664,12 +743,12 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
         for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
         have = true;
       }
-      if (!have && options.reference) {
+      if (!have && options.reference && !cs.wound[f]) {
         for (int k = 0; k < 3; ++k) r[k] = options.reference->corner(f, k);
         const double area = 0.5 * cross2(r[1] - r[0], r[2] - r[0]);
         have = orient2d_sign(r[0], r[1], r[2]) > 0 && area >= options.min_area_ratio * ideal_area_[f];
       }
-      if (!have && strategy == kUnfold) {
+      if (!have && strategy == kUnfold && !cs.wound[f]) {
         // Move the vertex whose adjacent edges are no isolines and which is closest to the line
         // of its opposite edge, to the positive side with a modest area.
         for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
@@ -816,73 +895,102 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
       }
     };
     const int rounds = std::max(1, options.max_repair_rounds);
-    for (int f = 0; f < nf; ++f)
-      if (is_bad(current.state[f])) rings[f] = first_rings;
-    if (options.regularity == RegularityMode::AllFaces) {
-      region.assign(nf, 1);
-      active.assign(nf, 1);
-    } else {
-      grow_region();
-      add_bad(current, active, 1, nullptr);
-    }
     std::vector<char> touched(nf, 0);  // faces that were bad at some point
-    for (int f = 0; f < nf; ++f) touched[f] = is_bad(current.state[f]);
-    int rejected = 0, best_round = -1;
-    Census best = current;  // the best pose seen (fewest bad faces, then least depth)
-    Eigen::VectorXd best_z = z;
-    for (int round = 0; round < rounds; ++round) {
-      ++st.repair_rounds;
-      QPResult::Status status;
-      const double t0 = 0.3 + 0.5 * round / rounds;
-      // The strategies take turns (a rejected round leaves the pose unchanged).
-      static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
-      const int strategy = kOrder[round % 4];
-      const Eigen::VectorXd y = solve_region(region, active, z, current, strategy, pb + span * t0,
-                                             pb + span * (t0 + 0.5 / rounds), &status);
-      Census next = census(y);
-      bool escaped = false;
-      for (int f = 0; f < nf && !escaped; ++f) escaped = is_bad(next.state[f]) && !active[f];
-      if (escaped) {
-        // Unconstrained faces went bad: they are constrained from now on. The new pose is kept
-        // only if it is better anyway.
+    for (int pass = 0; pass < 2; ++pass) {
+      if (pass == 1) {
+        // The local repair left bad faces (typically a flip next to a wound vertex, which no local
+        // region can unwind): one global solve with every face held in the sectors of its ideal
+        // shape in the field's frame (Bommes et al. 2013), elastically; then local repair again.
+        if (current.bad() == 0 || cone_quarter_turns_.empty() || options.regularity == RegularityMode::AllFaces ||
+            !options.field_frame_fallback)
+          break;
+        Census all = current;
+        all.field_frame = true;
         for (int f = 0; f < nf; ++f)
-          if (is_bad(next.state[f]) && !active[f]) {
-            touched[f] = 1;
-            if (rings[f] == 0) rings[f] = first_rings;
-          }
-        add_bad(next, active, 1, &active);
-        if (!(next.bad() < current.bad() && next.depth < current.depth)) {
-          add_bad(next, region, first_rings, nullptr);
-          continue;
-        }
-      }
-      // Keep the new pose when it has fewer bad faces or they are less bad.
-      const bool accepted = next.bad() < current.bad() || next.depth < current.depth;
-      if (accepted) {
+          if (all.state[f] == kHealthy) all.state[f] = kWound;
+        const std::vector<char> every(nf, 1);
+        QPResult::Status status;
+        const double t0 = 0.3 + 0.5 * std::min(st.repair_rounds, rounds - 1) / rounds;
+        const Eigen::VectorXd y = solve_region(every, every, z, all, kPropagated, pb + span * t0,
+                                               pb + span * (t0 + 0.5 / rounds), &status);
+        ++st.field_frame_solves;
+        Census next = census(y);
+        if (!next.fewer_bad(current)) break;
         z = y;
         current = std::move(next);
-        rejected = 0;
-        if (current.bad() < best.bad() || (current.bad() == best.bad() && current.depth < best.depth)) {
-          best = current;
-          best_z = z;
-          best_round = round;
-        }
-      } else if (++rejected >= 4) {
-        break;  // no strategy makes progress: a fixed point
+        rings.assign(nf, 0);
+        active.assign(nf, 1);  // every face the repair's variables reach stays constrained
+        if (current.bad() == 0) break;
       }
-      if (current.bad() == 0) break;
-      if (round - best_round >= options.stagnation_rounds) break;  // no new best for a while
-      // Faces still bad get wider rings; faces fixed earlier stay constrained.
       for (int f = 0; f < nf; ++f)
-        if (is_bad(current.state[f])) {
-          rings[f] = rings[f] == 0 ? first_rings : std::min(std::max(1, 2 * rings[f]), max_rings);
-          touched[f] = 1;
+        if (is_bad(current.state[f])) rings[f] = first_rings;
+      if (options.regularity == RegularityMode::AllFaces) {
+        region.assign(nf, 1);
+        active.assign(nf, 1);
+      } else {
+        grow_region();
+        add_bad(current, active, 1, nullptr);
+      }
+      for (int f = 0; f < nf; ++f) touched[f] = touched[f] || is_bad(current.state[f]);
+      int rejected = 0, best_round = -1;
+      Census best = current;  // the best pose seen (fewest bad faces, then least depth)
+      Eigen::VectorXd best_z = z;
+      // After the global solve, the local repair gets half the rounds again.
+      const int pass_rounds = pass == 0 ? rounds : std::max(1, rounds / 2);
+      for (int round = 0; round < pass_rounds; ++round) {
+        ++st.repair_rounds;
+        QPResult::Status status;
+        const double t0 = 0.3 + 0.5 * std::min(st.repair_rounds - 1, rounds - 1) / rounds;
+        // The strategies take turns (a rejected round leaves the pose unchanged).
+        static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
+        const int strategy = kOrder[round % 4];
+        const Eigen::VectorXd y = solve_region(region, active, z, current, strategy, pb + span * t0,
+                                               pb + span * (t0 + 0.5 / rounds), &status);
+        Census next = census(y);
+        bool escaped = false;
+        for (int f = 0; f < nf && !escaped; ++f) escaped = is_bad(next.state[f]) && !active[f];
+        if (escaped) {
+          // Unconstrained faces went bad: they are constrained from now on. The new pose is kept
+          // only if it is better anyway.
+          for (int f = 0; f < nf; ++f)
+            if (is_bad(next.state[f]) && !active[f]) {
+              touched[f] = 1;
+              if (rings[f] == 0) rings[f] = first_rings;
+            }
+          add_bad(next, active, 1, &active);
+          if (!(next.fewer_bad(current) && next.depth < current.depth)) {
+            add_bad(next, region, first_rings, nullptr);
+            continue;
+          }
         }
-      if (options.regularity != RegularityMode::AllFaces) grow_region();
-      add_bad(current, active, 1, nullptr);
+        // Keep the new pose when it has fewer bad faces or they are less bad.
+        const bool accepted = next.fewer_bad(current) || next.depth < current.depth;
+        if (accepted) {
+          z = y;
+          current = std::move(next);
+          rejected = 0;
+          if (current.fewer_bad(best) || (!best.fewer_bad(current) && current.depth < best.depth)) {
+            best = current;
+            best_z = z;
+            best_round = round;
+          }
+        } else if (++rejected >= 4) {
+          break;  // no strategy makes progress: a fixed point
+        }
+        if (current.bad() == 0) break;
+        if (round - best_round >= options.stagnation_rounds) break;  // no new best for a while
+        // Faces still bad get wider rings; faces fixed earlier stay constrained.
+        for (int f = 0; f < nf; ++f)
+          if (is_bad(current.state[f])) {
+            rings[f] = rings[f] == 0 ? first_rings : std::min(std::max(1, 2 * rings[f]), max_rings);
+            touched[f] = 1;
+          }
+        if (options.regularity != RegularityMode::AllFaces) grow_region();
+        add_bad(current, active, 1, nullptr);
+      }
+      z = best_z;
+      current = best;
     }
-    z = best_z;
-    current = best;
     // Re-linearize around the faces that were repaired.
     if (options.regularity != RegularityMode::AllFaces) {
       region = touched;
@@ -940,6 +1048,7 @@ ParametrizationSolution ParametrizationProblem::solve_with_relinearization(Param
     total.ipopt_solves += s.ipopt_solves;
     total.ipopt_iterations += s.ipopt_iterations;
     total.repair_rounds += s.repair_rounds;
+    total.field_frame_solves += s.field_frame_solves;
     total.relinearizations += s.relinearizations;
     total.seconds_assembly += s.seconds_assembly;
     total.seconds_cholesky += s.seconds_cholesky;
@@ -969,6 +1078,7 @@ ParametrizationSolution ParametrizationProblem::solve_with_relinearization(Param
   total.degenerate_initial = s.degenerate_initial;
   total.thin_initial = s.thin_initial;
   total.flipped = s.flipped;
+  total.winding_defects = s.winding_defects;
   total.degenerate = s.degenerate;
   total.thin = s.thin;
   total.forced_degenerate = s.forced_degenerate;

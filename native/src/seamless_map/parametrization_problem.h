@@ -24,6 +24,7 @@
 // lower the energy (paper §7.1).
 #pragma once
 #include <array>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -60,6 +61,9 @@ struct ParametrizationSolveOptions {
   int max_ring_size = 32;         // a face's rings double while it stays bad, up to this
   int max_repair_rounds = 24;     // repair rounds (Ipopt solves) before giving up
   int stagnation_rounds = 8;      // give up after this many rounds without a new best
+  bool field_frame_fallback = true;  // with cone angles: one global solve in the field's frame when
+                                     // the local repair leaves bad faces, then max_repair_rounds / 2
+                                     // more local rounds
   int relinearization_rounds = 3;   // at most this many re-linearizations once regular
   double relinearization_tolerance = 1e-3;  // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;
@@ -79,6 +83,7 @@ struct ParametrizationSolveStats {
   double constraint_violation = 0;  // max |Cz - b| of the caller's linear constraints
   int ipopt_solves = 0, ipopt_iterations = 0;
   int repair_rounds = 0, relinearizations = 0;
+  int field_frame_solves = 0;  // global solves with every face in its field-frame sectors
   int max_region_faces = 0, max_qp_variables = 0;
   int non_integer_pivots = 0, redundant_constraints = 0, inconsistent_constraints = 0;
   double seconds_assembly = 0, seconds_cholesky = 0, seconds_ipopt = 0;
@@ -160,6 +165,10 @@ class ParametrizationProblem {
   std::vector<Vec2> ideal_;      // 3#F ideal corner positions (uv units)
   std::vector<double> ideal_area_;  // #F
   std::vector<std::array<double, 6>> gradient_;  // #F: 2x3 gradient operator (row-major) in the frame
+
+  // Full turns by which each vertex's one-ring winds off its cone angle (#V; empty without cone
+  // angles); corner(c) is the uv of corner c. Vertices next to flipped faces get arbitrary values.
+  std::vector<int> winding_charges(const std::function<Vec2(int)>& corner) const;
 
   std::unique_ptr<System> system_;  // cached elimination + energy for one mode
 };

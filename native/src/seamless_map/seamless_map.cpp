@@ -116,6 +116,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
+  solve_options.field_frame_fallback = options.field_frame_fallback;
   ParametrizationSolution solution = problem->solve(solve_options, progress);
 
   SeamlessMap out;
@@ -136,6 +137,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.dropped_isoline_edges = iso.dropped;
   st.ipopt_solves = s.ipopt_solves;
   st.repair_rounds = s.repair_rounds;
+  st.field_frame_solves = s.field_frame_solves;
   st.max_region_faces = s.max_region_faces;
   st.min_area_ratio = s.min_area_ratio;
   st.seconds_cholesky = s.seconds_cholesky;

@@ -14,6 +14,7 @@ struct SeamlessMapOptions {
   double edge_length = 1;  // target quad edge length in model units: 1 uv unit = edge_length
   bool regularity = true;  // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
   int max_repair_rounds = 24;  // Ipopt repair rounds at most (see ParametrizationSolveOptions)
+  bool field_frame_fallback = true;  // see ParametrizationSolveOptions
 };
 
 struct SeamlessMapStats {
@@ -32,6 +33,7 @@ struct SeamlessMapStats {
   std::vector<int> dropped_isoline_edges;
   int ipopt_solves = 0;
   int repair_rounds = 0;          // Ipopt repair rounds (0: the Cholesky optimum was regular)
+  int field_frame_solves = 0;     // global solves in the field frame after a failed local repair
   int max_region_faces = 0;       // most faces constrained in one Ipopt solve
   double min_area_ratio = 0;      // min parametric / ideal (field-aligned) triangle area
   double seconds_cholesky = 0, seconds_ipopt = 0;
