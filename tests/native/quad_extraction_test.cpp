@@ -19,6 +19,8 @@
 #include "quad_extraction/quad_extraction.h"
 #include "quad_extraction/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
+#include "quad_extraction/untangle_quads.h"
+#include "cross_field/cross_field.h"
 #include "test_support.h"
 
 namespace qgp {
@@ -377,6 +379,57 @@ TEST(QuadExtraction, CubeQuadsLieOnTheCube) {
       ++covered;
     }
   EXPECT_EQ(covered, 12 * 12);
+}
+
+// Folded cube quads (free vertices pushed across their neighbours) are unfolded; vertices on the
+// cube's sharp edges never move, the connectivity stays.
+TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
+  const auto cube = scaled(test::make_grid_cube(4), 3);
+  Progress progress;
+  QuadMesh quads = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
+  const std::vector<char> sharp = detect_feature_edges(cube.mesh, {}, 40);
+  const TriangleBvh bvh(cube.mesh);
+  auto on_cube_edge = [&](int v) {
+    int extreme = 0;
+    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
+    return extreme >= 2;
+  };
+  // Push a few face-interior vertices past the opposite corner of one of their quads (staying on
+  // their cube face).
+  std::mt19937 rng(5);
+  int folded = 0;
+  for (int v = 0; v < quads.num_vertices() && folded < 6; ++v) {
+    if (on_cube_edge(v) || rng() % 9 != 0) continue;
+    for (int q = 0; q < quads.num_quads(); ++q)
+      for (int k = 0; k < 4; ++k)
+        if (quads.Q(q, k) == v) {
+          const int w = quads.Q(q, (k + 2) % 4);
+          const Vec3 moved = quads.V.row(w).transpose() + 0.4 * (quads.V.row(w) - quads.V.row(v)).transpose();
+          const TriangleBvh::Hit hit = bvh.closest_point(moved);
+          if (on_cube_edge(w) || (hit.point - moved).norm() > 1e-9) continue;
+          quads.V.row(v) = hit.point.transpose();
+          quads.vertex_face[v] = hit.triangle;
+          ++folded;
+          q = quads.num_quads();
+          break;
+        }
+  }
+  ASSERT_GE(folded, 3);
+  const QuadMesh folded_quads = quads;
+  const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
+  EXPECT_GT(stats.flipped_before, 0);
+  EXPECT_EQ(stats.flipped_after, 0);
+  EXPECT_EQ(compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress).flipped_quads, 0);
+  EXPECT_EQ(quads.Q, folded_quads.Q);
+  for (int v = 0; v < quads.num_vertices(); ++v) {
+    if (on_cube_edge(v)) EXPECT_EQ(quads.V.row(v), folded_quads.V.row(v)) << v;
+    EXPECT_LT(bvh.closest_point(quads.V.row(v).transpose()).squared_distance, 1e-18) << v;
+  }
+  // Nothing flipped: nothing moves.
+  QuadMesh clean = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
+  const QuadMesh copy = clean;
+  EXPECT_EQ(untangle_flipped_quads(clean, cube.mesh, sharp, progress).moved_vertices, 0);
+  EXPECT_EQ(clean.V, copy.V);
 }
 
 TEST(QuadExtraction, Tori) {

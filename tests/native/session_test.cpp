@@ -283,13 +283,13 @@ TEST(SessionMeshes, OrganicMeshesBecomeValidQuadMeshesAtThreeDensities) {
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
-// More shapes at 2000 quads (CAD without features, open, higher genus, scans): the integer-grid
+// More shapes at 2000 quads (CAD with and without features, open, higher genus, scans): the integer-grid
 // map's quads or, where that map keeps a flip, the T-mesh layout's; the output invariants hold.
 TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
   const std::vector<std::pair<std::string, double>> meshes = {
       {"block.obj", -1},   {"fandisk.obj", -1}, {"fertility.off", -1},  {"beetle.off", -1},
       {"wingnut.obj", -1}, {"face.obj", -1},    {"decimated-max.obj", -1}, {"mnf07HeadFem_rem_rem_p.obj", -1},
-      {"wingnut.obj", 40}};
+      {"wingnut.obj", 40}, {"fandisk.obj", 40}, {"stanford-bunny.obj", -1}};
   const std::vector<std::string> failed = sweep(meshes, {2000});
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }

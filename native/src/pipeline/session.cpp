@@ -232,6 +232,7 @@ void Session::run_seamless_stage(Progress& progress) {
                              {"isoline_edges", s.isoline_edges},
                              {"dropped_isolines", s.dropped_isolines},
                              {"repair_rounds", s.repair_rounds},
+                             {"field_frame_solves", s.field_frame_solves},
                              {"min_area_ratio", s.min_area_ratio}});
     flipped += s.flipped_triangles;
     degenerate += s.degenerate_triangles;
@@ -411,8 +412,11 @@ void Session::run_quad_stage(Progress& progress) {
         // Never hand out a broken mesh.
         const std::string defects = quad_mesh_defects(quad_topology(layout.quads), euler);
         if (!defects.empty())
-          throw Error(ErrorCode::StageFailed, "quad extraction: the quads do not form a valid mesh (" + defects +
-                                                  "); no output was written");
+          throw Error(ErrorCode::StageFailed,
+                      "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written" +
+                          (defects.rfind("Euler", 0) == 0
+                               ? ". A hole or handle of this part is narrower than one quad: try more quads"
+                               : ""));
         QuadExtraction extraction;
         extraction.quads = std::move(layout.quads);
         extraction.stats.expected_quads = layout.stats.quads;
@@ -422,10 +426,14 @@ void Session::run_quad_stage(Progress& progress) {
         state.quads_path = "T-mesh layout (" + why_not_igm + ")";
         state.layout_stats = layout.stats;
       }
+      state.untangle_stats = untangle_flipped_quads(state.quads->quads, state.mesh, state.field->feature_edge, progress);
     }
     Json stats = quad_extraction_stats_json(state.quads->stats);
     stats["path"] = state.quads_path;
     if (state.quads_path.rfind("T-mesh", 0) == 0) stats["layout"] = layout_quads_stats_json(state.layout_stats);
+    const UntangleStats& u = state.untangle_stats;
+    stats["untangle"] = {{"flipped_before", u.flipped_before}, {"flipped_after", u.flipped_after},
+                         {"moved_vertices", u.moved_vertices}, {"seconds", u.seconds}};
     per_component.push_back(std::move(stats));
   });
   int from_layout = 0;

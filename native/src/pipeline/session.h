@@ -15,6 +15,7 @@
 #include "intake/polygon_soup.h"
 #include "pipeline/options.h"
 #include "quad_extraction/layout_quads.h"
+#include "quad_extraction/untangle_quads.h"
 #include "quad_extraction/quad_extraction.h"
 #include "quantization/quantization.h"
 #include "seamless_map/seamless_map.h"
@@ -49,6 +50,7 @@ struct ComponentState {
   std::optional<QuadExtraction> quads;
   std::string quads_path;               // "integer-grid map" or "T-mesh layout (<why>)"
   LayoutQuadsStats layout_stats;        // when the quads come from the T-mesh layout
+  UntangleStats untangle_stats;         // flipped quads unfolded after extraction
 };
 
 class Session {

@@ -51,6 +51,10 @@ struct QuadMetrics {
   double hausdorff_mesh_to_quads = 0;
 };
 
+// Quad p[0..3] (counter-clockwise) is flipped: its normal (of the diagonals) points against the
+// summed normals of `reference` at the closest points of five interior points.
+bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh);
+
 // reference: the triangle surface the quads approximate (normals for flips, Hausdorff distance).
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
                                  Progress& progress);
