@@ -103,6 +103,13 @@ def test_broken_inputs(binding):
         assert "non-manifold edge" in message, message
         assert "QGP Grid" not in obj.data.uv_layers
         print(f"{name}: refused without changes: {message[:70]}")
+    # Teapot: non-manifold vertices (split by the intake) and parts whose holes are narrower than a
+    # quad at this density: refused with the part and the reason named, nothing changed.
+    reset_scene()
+    obj = import_mesh(binding, "teapot.obj")
+    message = expect_operator_error(bpy.ops.object.qgp_quad_remesh, target_faces=500)
+    assert "component" in message and "try more quads" in message, message
+    print(f"teapot.obj: refused without changes: {message[:90]}")
     # An object without faces.
     reset_scene()
     mesh = bpy.data.meshes.new("empty")
@@ -141,34 +148,86 @@ def euler_characteristic(mesh):
     return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
 
 
+def mark_sharp_edges(obj, angle):
+    """Marks the edges whose faces meet at more than `angle` (radians) as sharp, as a user would."""
+    import bmesh
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    count = 0
+    for edge in bm.edges:
+        sharp = edge.is_manifold and edge.calc_face_angle(0.0) > angle
+        edge.smooth = not sharp
+        count += sharp
+    bm.to_mesh(obj.data)
+    bm.free()
+    return count
+
+
+def measure_against_source(binding, source, quad, sharp_angle):
+    """The library's own measurement of the quads against the source triangles (dict: flipped
+    quads, Hausdorff distance, share of the sharp edges' length covered by quad edges, ...)."""
+    import numpy as np
+    src = source.data
+    src.calc_loop_triangles()
+    tris = np.array([t.vertices[:] for t in src.loop_triangles], np.int32)
+    sv = np.array([v.co[:] for v in src.vertices])
+    qv = np.array([v.co[:] for v in quad.data.vertices])
+    sizes = np.array([len(p.vertices) for p in quad.data.polygons], np.int32)
+    corners = np.array([i for p in quad.data.polygons for i in p.vertices], np.int32)
+    return binding.measure_polygon_mesh(qv, sizes, corners, sv, tris, math.degrees(sharp_angle))
+
+
+def select_only(obj):
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
 def test_quad_remesh(binding):
-    """Suzanne (subdivided), a torus, an open mesh and a CAD mesh with its sharp edges marked:
-    a new all-quad object next to an untouched source."""
+    """Suzanne (subdivided), a torus, camelhead (open), fandisk with its sharp edges marked and a CAD
+    part with the angle option: a new all-quad object next to an untouched source, with the
+    source's name, transform, collection and materials."""
     reset_scene()
     bpy.ops.mesh.primitive_monkey_add()
     monkey = bpy.context.active_object
     monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
     bpy.ops.object.modifier_apply(modifier="subsurf")
-    cases = [(monkey, 1200, False)]
+    monkey.location = (1.5, -2.0, 0.25)
+    monkey.rotation_euler = (0.3, 0.0, 1.1)
+    bpy.context.view_layer.update()
+    cases = [(monkey, 1200, {})]
     bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
-    cases.append((bpy.context.active_object, 600, False))
-    cases.append((import_mesh(binding, "face.obj"), 2000, False))  # open: a boundary loop
+    cases.append((bpy.context.active_object, 600, {}))
+    cases.append((import_mesh(binding, "camelhead.off"), 2000, {}))  # open: a boundary loop
+    fandisk = import_mesh(binding, "fandisk.obj")
+    marked = mark_sharp_edges(fandisk, math.radians(40))
+    assert marked > 600, marked
+    cases.append((fandisk, 2000, dict(use_marked_sharp=True, use_sharp_angle=False)))
     # A CAD part: edges sharper than 40 degrees are kept (the operator's angle option).
-    cad = import_mesh(binding, "joint.obj")
-    cases.append((cad, 2000, True))
-    sharp_options = dict(use_marked_sharp=False, use_sharp_angle=True, sharp_angle=math.radians(40))
-    for source, target, sharp in cases:
-        for other in bpy.context.selected_objects:
-            other.select_set(False)
-        source.select_set(True)
-        bpy.context.view_layer.objects.active = source
+    cases.append((import_mesh(binding, "joint.obj"), 2000,
+                  dict(use_marked_sharp=False, use_sharp_angle=True, sharp_angle=math.radians(40))))
+    material = bpy.data.materials.new("qgp_test_material")
+    collection = bpy.data.collections.new("qgp_test_collection")
+    bpy.context.scene.collection.children.link(collection)
+    for source, _, _ in cases:
+        source.data.materials.append(material)
+        for c in list(source.users_collection):
+            c.objects.unlink(source)
+        collection.objects.link(source)
+    for source, target, options in cases:
+        select_only(source)
         before_source = [e for e in scene_state()[0] if e[0] == source.name]
         names = {o.name for o in bpy.data.objects}
-        result = bpy.ops.object.qgp_quad_remesh(target_faces=target, **(sharp_options if sharp else {}))
+        result = bpy.ops.object.qgp_quad_remesh(target_faces=target, **options)
         assert result == {"FINISHED"}, result
         created = [o for o in bpy.data.objects if o.name not in names]
         assert len(created) == 1, created
         quad = created[0]
+        assert quad.name == source.name + "_quads", quad.name
+        assert bpy.context.view_layer.objects.active == quad and quad.select_get()
+        assert [c.name for c in quad.users_collection] == ["qgp_test_collection"], quad.users_collection
+        assert [m.name for m in quad.data.materials] == ["qgp_test_material"], list(quad.data.materials)
         assert [e for e in scene_state()[0] if e[0] == source.name][0][4:] == before_source[0][4:], "source data changed"
         sizes = {len(p.vertices) for p in quad.data.polygons}
         assert sizes == {4}, f"not all quads: {sizes}"
@@ -176,8 +235,20 @@ def test_quad_remesh(binding):
         assert 0.7 * target < n < 1.3 * target, (source.name, n, target)
         assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
             euler_characteristic(quad.data), euler_characteristic(source.data))
-        assert quad.matrix_world == source.matrix_world
-        print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept")
+        bpy.context.view_layer.update()
+        assert quad.parent == source.parent, (quad.parent, source.parent)
+        assert all(abs(a - b) < 1e-6 for ra, rb in zip(quad.matrix_world, source.matrix_world) for a, b in zip(ra, rb)), (
+            quad.matrix_world, source.matrix_world)
+        extra = ""
+        if options.get("use_marked_sharp"):
+            # The marked edges are exactly those sharper than 40 degrees: the library measures how
+            # much of their length quad edges cover (within 0.1 % of the diagonal).
+            m = measure_against_source(binding, source, quad, math.radians(40))
+            assert m["sharp_edges"] == marked, (m["sharp_edges"], marked)
+            assert m["sharp_edge_coverage"] > 0.95, m["sharp_edge_coverage"]
+            assert m["flipped_quads"] == 0, m["flipped_quads"]
+            extra = f", {100 * m['sharp_edge_coverage']:.1f} % of the marked sharp edges covered, no flipped quad"
+        print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept{extra}")
 
 
 def grid_seam_residual(mesh, layer, quads_per_unit):
@@ -218,11 +289,14 @@ def test_grid_uv(binding):
     monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
     bpy.ops.object.modifier_apply(modifier="subsurf")
     cases = [(monkey, 1000, 4.0), (import_mesh(binding, "bunny.off"), 800, 1.0)]
+    bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
+    cases.append((bpy.context.active_object, 600, 2.0))
+    cases.append((import_mesh(binding, "camelhead.off"), 2000, 1.0))
+    fandisk = import_mesh(binding, "fandisk.obj")
+    mark_sharp_edges(fandisk, math.radians(40))  # the operator uses marked sharp edges by default
+    cases.append((fandisk, 2000, 1.0))
     for obj, target, per_unit in cases:
-        for other in bpy.context.selected_objects:
-            other.select_set(False)
-        obj.select_set(True)
-        bpy.context.view_layer.objects.active = obj
+        select_only(obj)
         vertices_before = [tuple(v.co) for v in obj.data.vertices]
         result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit)
         assert result == {"FINISHED"}, result
