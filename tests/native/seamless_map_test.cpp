@@ -520,8 +520,8 @@ Prepared prepare(const std::string& name, double sharp_angle, double target_face
 //   (adjacent singularity pairs everywhere); the equality-only optimum has ~465 folds and the
 //   repair, limited to 3 rounds to bound the suite's runtime, removes about half (223-227 on the
 //   dev machine, 222 on CI before the elimination change). Bound: it must remove at least a
-//   third, and leave fewer than 0.5% of the faces bad. No global field-frame solve here: on dragon
-//   it alone takes many minutes and gigabytes.
+//   third, and leave fewer than 0.5% of the faces bad. No winding repair here: its global field-frame
+//   solve alone takes many minutes and gigabytes on dragon.
 // - armadillo.obj: 2 folds next to two adjacent index -1 singularities joined by a cut edge
 //   before the elimination change; 0 on the dev machine since. A small allowance stays because
 //   the count has differed between machines.
@@ -546,7 +546,7 @@ TEST(SeamlessMapMeshes, EveryManifoldMeshIsSeamlessAndRegular) {
     const auto known = kKnownIrregular.find(name);
     if (known != kKnownIrregular.end() && known->second.max_repair_rounds > 0) {
       o.max_repair_rounds = known->second.max_repair_rounds;
-      o.field_frame_fallback = false;  // its global solve alone takes many minutes
+      o.winding_repair = false;  // the winding repair's global solve alone takes many minutes
     }
     Progress progress;
     Timer t;

@@ -505,11 +505,6 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
     double min_ratio = 0;
     double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
     int bad() const { return flipped + degenerate + thin + wound_faces; }
-    int folded() const { return flipped + degenerate + thin; }
-    // Fewer folded faces first, then fewer wound faces (unwinding needs the folds gone).
-    bool fewer_bad(const Census& o) const {
-      return folded() < o.folded() || (folded() == o.folded() && wound_faces < o.wound_faces);
-    }
   };
   // A flip-free map can still wind a one-ring a full turn off its cone (a valence-5 cone wound by
   // 90 degrees); the quads would then have a wrong irregular vertex there. Such vertices, with
@@ -517,7 +512,7 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
   // references follow the field (never their own wound pose).
   auto mark_wound = [&](const Eigen::VectorXd& x, Census& cs) {
     cs.wound.assign(nf, 0);
-    if (cone_quarter_turns_.empty()) return;
+    if (cone_quarter_turns_.empty() || !options.winding_repair) return;
     const std::vector<int> charge = winding_charges([&](int c) { return ev.corner(x, c); });
     std::vector<int> defects;
     for (int v = 0; v < mesh_.num_vertices(); ++v) {
@@ -902,7 +897,7 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
         // region can unwind): one global solve with every face held in the sectors of its ideal
         // shape in the field's frame (Bommes et al. 2013), elastically; then local repair again.
         if (current.bad() == 0 || cone_quarter_turns_.empty() || options.regularity == RegularityMode::AllFaces ||
-            !options.field_frame_fallback)
+            !options.winding_repair)
           break;
         Census all = current;
         all.field_frame = true;
@@ -915,7 +910,7 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
                                                pb + span * (t0 + 0.5 / rounds), &status);
         ++st.field_frame_solves;
         Census next = census(y);
-        if (!next.fewer_bad(current)) break;
+        if (!(next.bad() < current.bad())) break;
         z = y;
         current = std::move(next);
         rings.assign(nf, 0);
@@ -958,18 +953,18 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
               if (rings[f] == 0) rings[f] = first_rings;
             }
           add_bad(next, active, 1, &active);
-          if (!(next.fewer_bad(current) && next.depth < current.depth)) {
+          if (!(next.bad() < current.bad() && next.depth < current.depth)) {
             add_bad(next, region, first_rings, nullptr);
             continue;
           }
         }
         // Keep the new pose when it has fewer bad faces or they are less bad.
-        const bool accepted = next.fewer_bad(current) || next.depth < current.depth;
+        const bool accepted = next.bad() < current.bad() || next.depth < current.depth;
         if (accepted) {
           z = y;
           current = std::move(next);
           rejected = 0;
-          if (current.fewer_bad(best) || (!best.fewer_bad(current) && current.depth < best.depth)) {
+          if (current.bad() < best.bad() || (current.bad() == best.bad() && current.depth < best.depth)) {
             best = current;
             best_z = z;
             best_round = round;

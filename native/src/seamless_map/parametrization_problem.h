@@ -61,9 +61,9 @@ struct ParametrizationSolveOptions {
   int max_ring_size = 32;         // a face's rings double while it stays bad, up to this
   int max_repair_rounds = 24;     // repair rounds (Ipopt solves) before giving up
   int stagnation_rounds = 8;      // give up after this many rounds without a new best
-  bool field_frame_fallback = true;  // with cone angles: one global solve in the field's frame when
-                                     // the local repair leaves bad faces, then max_repair_rounds / 2
-                                     // more local rounds
+  bool winding_repair = true;  // with cone angles: one-rings wound a full turn off their cone are
+                               // bad faces; when the local repair leaves bad faces, one global
+                               // solve in the field's frame, then max_repair_rounds / 2 more rounds
   int relinearization_rounds = 3;   // at most this many re-linearizations once regular
   double relinearization_tolerance = 1e-3;  // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;

@@ -116,7 +116,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
-  solve_options.field_frame_fallback = options.field_frame_fallback;
+  solve_options.winding_repair = options.winding_repair;
   ParametrizationSolution solution = problem->solve(solve_options, progress);
 
   SeamlessMap out;

@@ -14,7 +14,7 @@ struct SeamlessMapOptions {
   double edge_length = 1;  // target quad edge length in model units: 1 uv unit = edge_length
   bool regularity = true;  // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
   int max_repair_rounds = 24;  // Ipopt repair rounds at most (see ParametrizationSolveOptions)
-  bool field_frame_fallback = true;  // see ParametrizationSolveOptions
+  bool winding_repair = true;  // see ParametrizationSolveOptions
 };
 
 struct SeamlessMapStats {
