@@ -410,13 +410,15 @@ void Session::run_quad_stage(Progress& progress) {
         LayoutQuads layout =
             extract_layout_quads(state.mesh, *state.exact_seamless, *state.tmesh, state.quantization->x, progress);
         // Never hand out a broken mesh.
-        const std::string defects = quad_mesh_defects(quad_topology(layout.quads), euler);
-        if (!defects.empty())
+        const QuadTopology topology = quad_topology(layout.quads);
+        const std::string defects = quad_mesh_defects(topology, euler);
+        if (!defects.empty()) {
+          // A manifold, oriented result of another topology: a hole or handle collapsed.
+          const bool collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;
           throw Error(ErrorCode::StageFailed,
                       "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written" +
-                          (defects.rfind("Euler", 0) == 0
-                               ? ". A hole or handle of this part is narrower than one quad: try more quads"
-                               : ""));
+                          (collapsed ? ". A hole or handle of this part is narrower than one quad: try more quads" : ""));
+        }
         QuadExtraction extraction;
         extraction.quads = std::move(layout.quads);
         extraction.stats.expected_quads = layout.stats.quads;

@@ -14,13 +14,6 @@ uint64_t edge_key(int a, int b) {
   return static_cast<uint64_t>(std::min(a, b)) << 32 | static_cast<uint32_t>(std::max(a, b));
 }
 
-double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * d - p).norm();
-}
-
 // Segments hashed into a uniform grid, for "is there a segment within r of p" queries.
 class SegmentGrid {
  public:

@@ -5,6 +5,13 @@
 
 namespace qgp {
 
+double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * d - p).norm();
+}
+
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   // Voronoi regions of the vertices, edges and face (as in Ericson, Real-Time Collision Detection).
   const Vec3 ab = b - a, ac = c - a, ap = p - a;

@@ -43,6 +43,8 @@ class TriangleBvh {
 
 // Closest point to p on triangle (a, b, c), exact up to rounding, degenerate triangles included.
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+// Distance from p to segment [a, b] (a point when a == b).
+double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
 
 // Moves every quad vertex onto its closest point of `target` (the original, finer surface) and
 // sets vertex_face to the target triangle (quad_face is cleared: it referred to the working mesh).

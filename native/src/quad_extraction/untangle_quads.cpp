@@ -11,13 +11,6 @@ namespace qgp {
 
 namespace {
 
-double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * d - p).norm();
-}
-
 // Quad vertices that must stay: on a feature or boundary edge or at a feature vertex of the surface.
 std::vector<char> pinned_to_features(const QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges) {
   auto is_feature = [&](int e) { return surface.is_boundary_edge(e) || (!feature_edges.empty() && feature_edges[e]); };
@@ -38,7 +31,7 @@ std::vector<char> pinned_to_features(const QuadMesh& quads, const TriMesh& surfa
     for (int k = 0; k < 3 && !pinned[v]; ++k) {
       const Vec3 a = surface.position(surface.F(f, k)), b = surface.position(surface.F(f, (k + 1) % 3));
       const double tolerance = 1e-6 * (b - a).norm();
-      if (is_feature(surface.edge_of[3 * f + k]) && distance_to_segment(p, a, b) <= tolerance) pinned[v] = 1;
+      if (is_feature(surface.edge_of[3 * f + k]) && point_segment_distance(p, a, b) <= tolerance) pinned[v] = 1;
       if (feature_vertex[surface.F(f, k)] && (p - a).norm() <= tolerance) pinned[v] = 1;
     }
   }

@@ -662,13 +662,14 @@ ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolve
       std::vector<int> layer;
       for (int f : faces)
         if (cs.state[f] != kHealthy) {
-          // An isoline edge fixes the rotation: its direction is exactly an axis. Wound faces
-          // always take their rotation from the healthy faces around their cluster.
+          // The global field-frame solve: the field's own frame (or the isoline's axis).
           if (cs.field_frame) {
             ref_rotation[f] = pinned_rotation[f].squaredNorm() > 0 ? pinned_rotation[f] : Vec2(1, 0);
             assigned[f] = 1;
             continue;
           }
+          // An isoline edge fixes the rotation: its direction is exactly an axis. Wound faces
+          // always take their rotation from the healthy faces around their cluster.
           const bool propagate = follow_neighbours || cs.wound[f];
           if (pinned_rotation[f].squaredNorm() > 0) {
             ref_rotation[f] = pinned_rotation[f];
