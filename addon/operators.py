@@ -1,8 +1,9 @@
 """Operators: Quantized Retopo (new quad object) and Integer-Grid UVs (UV layer on the source).
 
 Both run synchronously in execute() (scripts, redo panel, blender -b) and as modal jobs from
-invoke() (progress bar, status text, Esc cancels). The source object is only ever changed by a
-successful Integer-Grid UVs run.
+invoke() (progress bar, status text, Esc cancels). The native sessions live in worker processes
+(core/worker.py), so a fault under the native code is a reported error, not a closed Blender. The
+source object is only ever changed by a successful Integer-Grid UVs run.
 """
 import math
 import time
@@ -10,7 +11,7 @@ import time
 import bpy
 
 from . import blender_mesh
-from .core import binding
+from .core import binding, worker
 from .prefs import preferences
 
 # Native sessions per object: reused when only the density changes (re-quantization only).
@@ -23,18 +24,29 @@ def _load_library(context):
     binding.load_library(bpy.path.abspath(path) if path else None)
 
 
-def _session_for(obj, source, sharp_angle):
+def _new_session(source, isolate):
+    """A worker-process session (a native fault cannot end Blender), or an in-process one when
+    isolation is off or no worker can start."""
+    if isolate:
+        try:
+            return worker.WorkerSession(source.vertices, source.triangles)
+        except worker.WorkerStartError as e:
+            print(f"Quantized Retopo: {e.message}; running the native job inside Blender")
+    return binding.Session(source.vertices, source.triangles)
+
+
+def _session_for(obj, source, sharp_angle, isolate=True):
     """A native session for this geometry and feature setup, cached per object: quad remesh and
     grid UVs share its stages, and a new density only re-quantizes."""
     key = obj.name
-    settings = (source.fingerprint(), sharp_angle)
+    settings = (source.fingerprint(), sharp_angle, isolate)
     cached = _session_cache.get(key)
-    if cached and cached[0] == settings:
+    if cached and cached[0] == settings and getattr(cached[1], "alive", True):
         return cached[1]
     if cached:
         cached[1].close()
         del _session_cache[key]
-    session = binding.Session(source.vertices, source.triangles)
+    session = _new_session(source, isolate)
     if len(source.features):
         session.set_features(source.features)
     session.set_option("sharp_angle", sharp_angle)
@@ -77,8 +89,8 @@ class _JobOperator:
 
     def modal(self, context, event):
         if event.type == "ESC":
-            self._session.cancel()
             try:
+                self._session.cancel()
                 self._session.wait()
             except binding.QGPError:
                 pass
@@ -87,7 +99,12 @@ class _JobOperator:
             return {"CANCELLED"}
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
-        state, fraction, stage = self._session.poll()
+        try:
+            state, fraction, stage = self._session.poll()
+        except binding.QGPError as e:  # the worker process died
+            self._end_modal(context)
+            self.report({"ERROR"}, e.message)
+            return {"CANCELLED"}
         if state == binding.STATE_RUNNING:
             context.window_manager.progress_update(int(1000 * fraction))
             context.workspace.status_text_set(
@@ -129,7 +146,8 @@ class _TargetProperties:
         if len(self._source.triangles) == 0:
             raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
         angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
-        session = _session_for(self._source_obj, self._source, angle)
+        prefs = preferences(context)
+        session = _session_for(self._source_obj, self._source, angle, prefs.isolate if prefs else True)
         if self.target_mode == "FACES":
             session.set_option("target_faces", self.target_faces)
         else:

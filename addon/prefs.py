@@ -18,9 +18,16 @@ class QGP_Preferences(bpy.types.AddonPreferences):
         default="",
     )
 
+    isolate: bpy.props.BoolProperty(
+        name="Separate Process",
+        description="Run native jobs in a child process: a fault in them cannot close Blender",
+        default=True,
+    )
+
     def draw(self, context):
         layout = self.layout
         layout.prop(self, "library_path")
+        layout.prop(self, "isolate")
         try:
             layout.label(text="Native library version " + binding.version())
         except binding.QGPError as e:

@@ -50,11 +50,17 @@ def library_candidates():
 
 
 _lib = None
+_lib_path = None
+
+
+def loaded_library_path():
+    """The path libqgp was loaded from, or None before load_library."""
+    return _lib_path
 
 
 def load_library(path=None):
     """Loads libqgp once and declares the C signatures. Raises QGPError if it cannot be found."""
-    global _lib
+    global _lib, _lib_path
     if _lib is not None and path is None:
         return _lib
     tried = []
@@ -66,7 +72,7 @@ def load_library(path=None):
                 tried.append(f"{candidate}: {e}")
                 continue
             _declare(lib)
-            _lib = lib
+            _lib, _lib_path = lib, os.path.abspath(candidate)
             return lib
         tried.append(f"{candidate}: not found")
     raise QGPError(ERR_INTERNAL, "cannot load the Quantized Retopo native library (" + "; ".join(tried) + ")")

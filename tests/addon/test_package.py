@@ -56,7 +56,7 @@ def main():
 
     with zipfile.ZipFile(ext_zip) as z:
         names = z.namelist()
-    for required in ("__init__.py", "blender_manifest.toml", "lib/libqgp.so", "core/binding.py", "operators.py",
+    for required in ("__init__.py", "blender_manifest.toml", "lib/libqgp.so", "core/binding.py", "core/worker.py", "operators.py",
                      "ui.py", "batch.py"):
         check(required in names, f"extension zip lacks {required} at its root")
     check(not any("__pycache__" in n for n in names), "extension zip contains __pycache__")

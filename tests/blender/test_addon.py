@@ -144,6 +144,42 @@ def test_cancel_leaves_scene_unchanged(binding):
     print("cancel: scene unchanged")
 
 
+def test_worker_fault_leaves_blender_running():
+    """The native job runs in a worker process: a crash there (here a SIGSEGV sent to it mid-job)
+    is a reported error, the scene is unchanged, and the next run starts a fresh worker."""
+    import signal
+    import threading
+    import time
+    operators = sys.modules[MODULE + ".operators"]
+    reset_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=400, ring_count=200)
+    obj = bpy.context.active_object
+    before = scene_state()
+    killed = []
+
+    def crash_the_worker():
+        deadline = time.time() + 60
+        while time.time() < deadline and not killed:
+            cached = operators._session_cache.get(obj.name)
+            pid = getattr(cached[1], "pid", None) if cached else None
+            if pid:
+                time.sleep(0.5)  # the job is running by now: intake alone takes longer
+                os.kill(pid, signal.SIGSEGV)
+                killed.append(pid)
+            time.sleep(0.01)
+
+    thread = threading.Thread(target=crash_the_worker)
+    thread.start()
+    message = expect_operator_error(bpy.ops.object.qgp_quad_remesh, target_faces=800)
+    thread.join()
+    assert killed, "the operator did not run in a worker process"
+    assert "SIGSEGV" in message and "unaffected" in message, message
+    assert scene_state() == before
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=800) == {"FINISHED"}, "no fresh worker after a crash"
+    assert operators._session_cache[obj.name][1].pid != killed[0]
+    print(f"worker crash: reported ({message[:60]}...), scene unchanged, next run fine")
+
+
 def euler_characteristic(mesh):
     return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
 
@@ -368,6 +404,7 @@ def main():
     test_registration()
     test_broken_inputs(binding)
     test_cancel_leaves_scene_unchanged(binding)
+    test_worker_fault_leaves_blender_running()
     test_quad_remesh(binding)
     test_grid_uv(binding)
     test_undo_restores_scene()

@@ -1,0 +1,247 @@
+"""Native sessions in a child process.
+
+A fault inside the native code or a library under it (a segfault, MUMPS calling abort) ends the
+child, not Blender: the call that was waiting on it raises QGPError naming the signal and the
+child's last output. WorkerSession has binding.Session's interface; requests and answers are
+pickled over a socket pair. Run as a script, this file is the child: it serves one session.
+"""
+import os
+import pickle
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+
+if __package__:
+    from . import binding
+else:  # the child: run as a script next to binding.py
+    import binding
+
+ERR_WORKER_DIED = binding.ERR_INTERNAL
+
+
+class _Channel:
+    """Pickled messages over a stream socket, each prefixed by its length. (Not
+    multiprocessing.connection: importing multiprocessing makes Debian's Blender 3.4 crash at exit.)"""
+
+    def __init__(self, sock):
+        self._sock = sock
+
+    def send(self, message):
+        data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
+        self._sock.sendall(struct.pack("<Q", len(data)) + data)
+
+    def recv(self):
+        size = struct.unpack("<Q", self._read(8))[0]
+        return pickle.loads(self._read(size))
+
+    def _read(self, size):
+        chunks, left = [], size
+        while left:
+            chunk = self._sock.recv(min(left, 1 << 24))
+            if not chunk:
+                raise EOFError("the other side closed the channel")
+            chunks.append(chunk)
+            left -= len(chunk)
+        return b"".join(chunks)
+
+    def close(self):
+        self._sock.close()
+
+
+class WorkerStartError(binding.QGPError):
+    """The child process could not be started (no usable Python or numpy): nothing native ran."""
+
+
+def python_executable():
+    """The interpreter Blender embeds (same version and packages), not whatever `python` is on PATH."""
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    for prefix in (sys.prefix, sys.base_prefix):
+        candidate = os.path.join(prefix, "bin", version)
+        if os.access(candidate, os.X_OK):
+            return candidate
+    return sys.executable
+
+
+class WorkerSession:
+    """A binding.Session living in its own process. Use as a context manager or call close()."""
+
+    def __init__(self, vertices, triangles):
+        self._process = None
+        self._conn = None
+        self._log = tempfile.TemporaryFile()
+        parent, child = socket.socketpair()
+        env = dict(os.environ)
+        if binding.loaded_library_path():
+            env["QGP_LIBRARY"] = binding.loaded_library_path()
+        try:
+            self._process = subprocess.Popen(
+                [python_executable(), "-s", os.path.abspath(__file__), str(child.fileno())],
+                pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL, stdout=self._log,
+                stderr=subprocess.STDOUT, env=env, close_fds=True)
+        except OSError as e:
+            parent.close()
+            raise WorkerStartError(binding.ERR_INTERNAL, f"cannot start the worker process: {e}")
+        finally:
+            child.close()
+        self._conn = _Channel(parent)
+        try:
+            self._call("version")
+        except binding.QGPError as e:
+            self.close()
+            raise WorkerStartError(e.code, e.message)
+        self._call("create", vertices, triangles)
+
+    @property
+    def pid(self):
+        return self._process.pid if self._process else None
+
+    @property
+    def alive(self):
+        return self._process is not None and self._process.poll() is None
+
+    def _died(self):
+        try:
+            code = self._process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            code = self._process.wait()
+        if code < 0:
+            try:
+                how = f"was killed by {signal.Signals(-code).name}"
+            except ValueError:
+                how = f"was killed by signal {-code}"
+        else:
+            how = f"exited with status {code}"
+        self._log.seek(0)
+        lines = [l.strip() for l in self._log.read().decode(errors="replace").splitlines() if l.strip()]
+        last = f"; its last output: {' | '.join(lines[-3:])}" if lines else ""
+        self._conn.close()
+        self._conn = None
+        return binding.QGPError(ERR_WORKER_DIED, f"the native job's process {how}{last}. "
+                                                 "Blender and the scene are unaffected")
+
+    def _call(self, method, *args):
+        if self._conn is None:
+            raise binding.QGPError(ERR_WORKER_DIED, "the native job's process has ended")
+        try:
+            self._conn.send((method, args))
+            status, value = self._conn.recv()
+        except (EOFError, OSError):
+            raise self._died() from None
+        if status == "error":
+            raise binding.QGPError(*value)
+        return value
+
+    # -- lifetime --
+    def close(self):
+        if self._conn is not None:
+            try:
+                self._conn.send(("close", ()))
+                self._conn.recv()
+            except (EOFError, OSError):
+                pass
+            self._conn.close()
+            self._conn = None
+        if self._process is not None:
+            try:
+                self._process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+            self._process = None
+        if self._log is not None:
+            self._log.close()
+            self._log = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    # -- binding.Session's interface, forwarded --
+    def set_option(self, name, value):
+        self._call("set_option", name, value)
+
+    def set_option_string(self, name, value):
+        self._call("set_option_string", name, value)
+
+    def set_features(self, edges):
+        self._call("set_features", edges)
+
+    def start(self, job):
+        self._call("start", job)
+
+    def poll(self):
+        return self._call("poll")
+
+    def cancel(self):
+        self._call("cancel")
+
+    def wait(self, timeout=-1.0):
+        return self._call("wait", timeout)
+
+    def run(self, job):
+        self.start(job)
+        return self.wait()
+
+    def report(self):
+        return self._call("report")
+
+    def intake_mesh(self):
+        return self._call("intake_mesh")
+
+    def quad_mesh(self):
+        return self._call("quad_mesh")
+
+    def grid_uv(self, num_triangles):
+        return self._call("grid_uv", num_triangles)
+
+
+def serve(fd):
+    """The child's loop: one session, requests until "close" or the parent goes away."""
+    conn = _Channel(socket.socket(fileno=fd))
+    session = None
+    try:
+        while True:
+            try:
+                method, args = conn.recv()
+            except (EOFError, OSError):
+                break
+            if method == "close":
+                conn.send(("ok", None))
+                break
+            try:
+                if method == "version":
+                    value = binding.version()
+                elif method == "create":
+                    session = binding.Session(*args)
+                    value = None
+                else:
+                    value = getattr(session, method)(*args)
+                conn.send(("ok", value))
+            except binding.QGPError as e:
+                conn.send(("error", (e.code, e.message)))
+            except Exception as e:  # a bug on this side: reported, the child stays usable
+                conn.send(("error", (binding.ERR_INTERNAL, f"worker: {type(e).__name__}: {e}")))
+    finally:
+        if session is not None:
+            session.close()
+
+
+if __name__ == "__main__":
+    try:
+        import resource
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a crash leaves no core file in the user's folder
+    except (ImportError, ValueError, OSError):
+        pass
+    serve(int(sys.argv[1]))
