@@ -1,9 +1,16 @@
 // qgp: command-line front end of the native pipeline, for batch use and tests.
 //
 // Exit codes: 0 success, 1 bad command line, 2 unusable input (with a one-line reason on
-// stderr), 3 a pipeline stage failed or is not built yet, 4 internal error.
+// stderr), 3 a pipeline stage failed or is not built yet, 4 internal error (also when the process
+// is ended from inside a library, e.g. MUMPS calling exit, or by a fatal signal: see
+// report_abnormal_ends).
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -26,6 +33,40 @@ const char* kUsage =
     "             [--features FILE] [--uv-out UV.obj] [--layout-out LAYOUT.obj]\n"
     "             [--report R.json] [--quantizer greedy|round] [--drop-bad-components]\n"
     "IN: .obj, .ply or .off. --features FILE: one vertex-index pair per line (0-based).\n";
+
+// --- Abnormal ends: a library under the pipeline (MUMPS: "** MPI_ABORT called", then a Fortran
+// STOP, i.e. exit(0)) or a fatal signal must never look like success to a batch script.
+std::atomic<bool> g_pipeline_running{false};
+
+void write_stderr(const char* text) {
+  ssize_t ignored = write(STDERR_FILENO, text, std::strlen(text));
+  (void)ignored;
+}
+
+void exit_during_pipeline() {
+  if (!g_pipeline_running.load()) return;
+  write_stderr("qgp: internal error: a library under the pipeline ended the process (its message, if any, is "
+               "above); no output was written\n");
+  _exit(4);
+}
+
+void fatal_signal(int sig) {
+  write_stderr(sig == SIGSEGV ? "qgp: internal error: crashed (SIGSEGV); no output was written\n"
+               : sig == SIGABRT ? "qgp: internal error: aborted (SIGABRT); no output was written\n"
+               : sig == SIGBUS ? "qgp: internal error: crashed (SIGBUS); no output was written\n"
+                               : "qgp: internal error: crashed (SIGFPE); no output was written\n");
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
+
+void report_abnormal_ends() {
+  std::atexit(exit_during_pipeline);
+  struct sigaction action {};
+  action.sa_handler = fatal_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE}) sigaction(sig, &action, nullptr);
+}
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -248,9 +289,12 @@ int run(const CommandLine& cl) {
     if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
     session->set_options(options);
     qgp::Progress progress;
+    g_pipeline_running = true;
     session->run(cl.command == "info" ? qgp::Job::Intake : qgp::Job::Remesh, progress);
+    g_pipeline_running = false;
     report = session->report();
   } catch (const qgp::Error& e) {
+    g_pipeline_running = false;
     report = session ? session->report() : qgp::Json::object();
     report["status"] = "error";
     report["error"] = {{"code", qgp::error_code_name(e.code())}, {"message", e.what()}};
@@ -285,6 +329,7 @@ int run(const CommandLine& cl) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  report_abnormal_ends();
   CommandLine cl;
   try {
     cl = parse(argc, argv);
@@ -295,6 +340,7 @@ int main(int argc, char** argv) {
   try {
     return run(cl);
   } catch (const std::exception& e) {
+    g_pipeline_running = false;
     std::cerr << "qgp: internal error: " << e.what() << "\n";
     return 4;
   }
