@@ -277,7 +277,8 @@ void print_remesh_summary(const qgp::Json& report) {
   const qgp::Json& q = report["quad"];
   std::cout << "quads " << q.value("faces", 0) << ", vertices " << q.value("vertices", 0) << ", irregular vertices "
             << q.value("irregular_vertices", 0) << ", min scaled Jacobian " << q.value("min_scaled_jacobian", 0.0)
-            << ", " << report["timings_s"].value("total", 0.0) << " s\n";
+            << ", " << report["timings_s"].value("total", 0.0) << " s, peak memory "
+            << static_cast<long>(report.value("peak_memory_mb", 0.0)) << " MB\n";
 }
 
 int run(const CommandLine& cl) {

@@ -99,6 +99,9 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
     EXPECT_TRUE(report["timings_s"].contains(stage)) << stage;
     EXPECT_GT(counter.updates[stage], 0) << stage;
   }
+  // The whole process's peak (this test binary, the spot mesh and its stages): tens of MB.
+  EXPECT_GT(report.value("peak_memory_mb", 0.0), 1.0);
+  EXPECT_LT(report.value("peak_memory_mb", 0.0), 1e5);
   for (double c : session.corner_uv()) EXPECT_TRUE(std::isfinite(c));
   EXPECT_GT(session.cut_edges().size(), 0u);
 }

@@ -1,5 +1,7 @@
-// Wall-clock stopwatch for the per-stage timings of the report.
+// Wall-clock stopwatch for the per-stage timings of the report, and the process's peak memory.
 #pragma once
+#include <sys/resource.h>
+
 #include <chrono>
 
 namespace qgp {
@@ -14,5 +16,13 @@ class Timer {
  private:
   std::chrono::steady_clock::time_point start_;
 };
+
+// Peak resident memory of the whole process so far, in MB (Linux: ru_maxrss is in KB). Inside a
+// host (Blender without the worker process) it includes the host's own memory.
+inline double peak_resident_mb() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
 
 }  // namespace qgp

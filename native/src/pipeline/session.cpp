@@ -54,10 +54,12 @@ void Session::run(Job job, Progress& progress) {
     run_intake_stage(progress);
     if (job != Job::Intake) run_remesh_stages(job, progress);
     report_["timings_s"]["total"] = total.seconds();
+    report_["peak_memory_mb"] = peak_resident_mb();
   } catch (const Error& e) {
     report_["status"] = "error";
     report_["error"] = {{"code", error_code_name(e.code())}, {"message", e.what()}};
     report_["timings_s"]["total"] = total.seconds();
+    report_["peak_memory_mb"] = peak_resident_mb();
     throw;
   } catch (const std::bad_alloc&) {
     report_["status"] = "error";
