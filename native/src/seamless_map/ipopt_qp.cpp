@@ -155,6 +155,10 @@ QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progre
   o.SetIntegerValue("print_level", 0);
   o.SetStringValue("sb", "yes");
   o.SetStringValue("linear_solver", "mumps");
+  // METIS ordering, not MUMPS's automatic choice: that picks SCOTCH on some large KKT systems
+  // (dragon-genus1), whose ordering then fails ("hallOrderHfR3Hamdf4: internal error") and MUMPS
+  // ends the process ("Internal error 3 in DMUMPS_ANA_DRIVER", MPI_ABORT).
+  o.SetIntegerValue("mumps_pivot_order", 5);
   o.SetStringValue("hessian_constant", "yes");
   o.SetStringValue("jac_c_constant", "yes");
   o.SetStringValue("jac_d_constant", "yes");
