@@ -14,7 +14,8 @@ from the CSV by bench/plots.py (system Python with matplotlib).
 Status per run: ok (a mesh came back), refused (the tool reported an error; message kept),
 unchanged (the tool returned without error but left the mesh as it was: QuadriFlow does this when
 its solver fails), timeout (Quantized Retopo did not finish within --timeout s and was cancelled),
-crashed (Blender died during the run; recorded by the next --resume run, which scripts/bench.sh starts).
+crashed (Quantized Retopo's worker process died, or Blender died during the run: recorded by the next
+--resume run, which scripts/bench.sh starts).
 """
 import argparse
 import csv
@@ -118,17 +119,16 @@ def mesh_polygons(mesh):
     return v.reshape(-1, 3), sizes, corners
 
 
-_stuck_sessions = []  # sessions whose job ignored a cancel (never freed; see run_qgp)
-
-
 def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
-    """Quantized Retopo the way the operator runs it (same mesh glue), with a cancel after `timeout` s.
-    Returns (status, message, result object or None, stage seconds dict)."""
+    """Quantized Retopo the way the operator runs it (same mesh glue, a worker process), with a cancel
+    after `timeout` s. Returns (status, message, result object or None, stage seconds dict); status
+    "crashed" when the worker process died (Blender goes on)."""
     blender_mesh = sys.modules[addon.__name__ + ".blender_mesh"]
+    worker = sys.modules[addon.__name__ + ".core.worker"]
     session = None
     try:
         src = blender_mesh.SourceMesh(bpy.context, source, evaluated=True, use_marked_sharp=True)
-        session = binding.Session(src.vertices, src.triangles)
+        session = worker.WorkerSession(src.vertices, src.triangles)
         session.set_option("sharp_angle", sharp_angle)
         session.set_option("target_faces", target)
         if quantizer:
@@ -141,11 +141,7 @@ def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
                 state = session.wait(30.0)
             except binding.QGPError:
                 state = binding.STATE_CANCELLED
-            if state == binding.STATE_RUNNING:
-                # The job ignores the cancel: freeing the session would block on its worker, so it is
-                # kept alive (leaked) and the benchmark goes on.
-                _stuck_sessions.append(session)
-                session = None
+            if state == binding.STATE_RUNNING:  # the cancel was not honoured: close() ends the process
                 return "timeout", f"cancelled after {timeout:.0f} s; the cancel was not honoured within 30 s", \
                     None, {}
             return "timeout", f"cancelled after {timeout:.0f} s", None, stage_seconds(session)
@@ -153,6 +149,8 @@ def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
         result = blender_mesh.create_quad_object(bpy.context, source, vertices, quads, quad_triangle, src)
         return "ok", "", result, stage_seconds(session)
     except binding.QGPError as e:
+        if session is not None and not session.alive:
+            return "crashed", e.message, None, {}
         return "refused", e.message, None, stage_seconds(session)
     finally:
         if session is not None:

@@ -64,7 +64,9 @@ if [ "$DO_COMPARE" = 1 ]; then
       --meshes "$MESHES" --targets "$TARGETS" --timeout "$QGP_TIMEOUT" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
     blender_pid=$!
     tail -n 0 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
-    if wait $blender_pid; then break; fi
+    # A library can end Blender with status 0 (MUMPS after an internal error): the case file left
+    # behind, not the status, says whether the run was cut short.
+    if wait $blender_pid && [ ! -f "$RESULTS/compare.pending" ]; then break; fi
     echo "bench: Blender exited with an error (attempt $attempt); resuming after the failed case"
     resume="--resume"
   done
