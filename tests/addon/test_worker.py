@@ -1,0 +1,121 @@
+#!/usr/bin/python3
+"""The add-on's worker process (addon/core/worker.py), outside Blender:
+a remesh in the worker gives exactly the in-process result; native errors keep their code and
+message; a worker killed mid-job (SIGKILL, SIGSEGV) is an error naming the signal and the session
+reports itself dead; closing during a job ends the child; a worker that cannot start is a
+WorkerStartError. Usage: test_worker.py --library libqgp.so --meshes DIR"""
+import argparse
+import os
+import signal
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+from core import binding, worker  # noqa: E402
+
+failures = []
+
+
+def check(condition, message):
+    print(("ok   " if condition else "FAIL ") + message)
+    if not condition:
+        failures.append(message)
+
+
+def load(meshes, name):
+    vertices, sizes, corners = binding.read_mesh_file(os.path.join(meshes, name))
+    assert (sizes == 3).all()
+    return vertices, corners.reshape(-1, 3)
+
+
+def same_result_as_in_process(meshes):
+    for name, target in (("bunny.off", 800), ("joint.obj", 500), ("face.obj", 600)):
+        vertices, triangles = load(meshes, name)
+        results = []
+        for make in (binding.Session, worker.WorkerSession):
+            with make(vertices, triangles) as session:
+                session.set_option("target_faces", target)
+                session.run(binding.JOB_REMESH)
+                v, q, src = session.quad_mesh()
+                results.append((v, q, src, session.report()["quad"]["faces"]))
+        (v0, q0, s0, n0), (v1, q1, s1, n1) = results
+        check(n0 == n1 == len(q1) and np.array_equal(q0, q1) and np.array_equal(s0, s1) and np.array_equal(v0, v1),
+              f"{name}: the worker's {len(q1)} quads are the in-process result")
+
+
+def native_errors_pass_through():
+    with worker.WorkerSession([[0, 0, 0], [1, 0, 0], [float("nan"), 1, 0]], [[0, 1, 2]]) as session:
+        try:
+            session.run(binding.JOB_INTAKE)
+            check(False, "NaN input refused")
+        except binding.QGPError as e:
+            check(e.code == binding.ERR_INVALID_MESH and "non-finite" in e.message and session.alive,
+                  f"native error keeps its code and message, worker alive: {e.message[:60]}")
+
+
+def killed_mid_job(meshes, sig):
+    vertices, triangles = load(meshes, "armadillo.obj")
+    session = worker.WorkerSession(vertices, triangles)
+    session.start(binding.JOB_REMESH)
+    time.sleep(1.0)
+    state = session.poll()[0]
+    os.kill(session.pid, sig)
+    try:
+        session.wait()
+        check(False, f"{sig.name}: error raised")
+    except binding.QGPError as e:
+        check(state == binding.STATE_RUNNING and sig.name in e.message and "unaffected" in e.message,
+              f"{sig.name} mid-job: {e.message[:70]}")
+    check(not session.alive, f"{sig.name}: session reports the worker dead")
+    try:
+        session.poll()
+        check(False, f"{sig.name}: calls after the death raise")
+    except binding.QGPError:
+        check(True, f"{sig.name}: calls after the death raise")
+    session.close()
+
+
+def close_during_job_ends_child(meshes):
+    vertices, triangles = load(meshes, "armadillo.obj")
+    session = worker.WorkerSession(vertices, triangles)
+    pid = session.pid
+    session.start(binding.JOB_REMESH)
+    time.sleep(0.5)
+    start = time.perf_counter()
+    session.close()
+    gone = not os.path.exists(f"/proc/{pid}") or open(f"/proc/{pid}/stat").read().split()[2] == "Z"
+    check(gone, f"close() during a job ends the child in {time.perf_counter() - start:.1f} s")
+
+
+def start_failure():
+    original = worker.python_executable
+    worker.python_executable = lambda: "/nonexistent/python3"
+    try:
+        worker.WorkerSession(np.zeros((3, 3)), np.array([[0, 1, 2]]))
+        check(False, "a worker that cannot start raises WorkerStartError")
+    except worker.WorkerStartError as e:
+        check(True, f"a worker that cannot start raises WorkerStartError: {e.message[:60]}")
+    finally:
+        worker.python_executable = original
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--library", required=True)
+    ap.add_argument("--meshes", required=True)
+    args = ap.parse_args()
+    binding.load_library(args.library)
+    same_result_as_in_process(args.meshes)
+    native_errors_pass_through()
+    for sig in (signal.SIGKILL, signal.SIGSEGV):
+        killed_mid_job(args.meshes, sig)
+    close_during_job_ends_child(args.meshes)
+    start_failure()
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
