@@ -35,13 +35,13 @@ def _new_session(source, isolate):
     return binding.Session(source.vertices, source.triangles)
 
 
-def _session_for(obj, source, sharp_angle, isolate=True):
+def _session_for(obj, source, sharp_angle, isolate):
     """A native session for this geometry and feature setup, cached per object: quad remesh and
     grid UVs share its stages, and a new density only re-quantizes."""
     key = obj.name
     settings = (source.fingerprint(), sharp_angle, isolate)
     cached = _session_cache.get(key)
-    if cached and cached[0] == settings and getattr(cached[1], "alive", True):
+    if cached and cached[0] == settings and cached[1].alive:  # a dead worker is replaced
         return cached[1]
     if cached:
         cached[1].close()

@@ -172,7 +172,29 @@ def _ptr(array, ctype):
     return array.ctypes.data_as(ctypes.POINTER(ctype))
 
 
-class Session:
+class SessionLifetime:
+    """What every session kind shares: context manager, close on collection, run = start + wait.
+    Subclasses provide close(), start() and wait()."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def run(self, job):
+        """Starts a job and waits for it (synchronous use)."""
+        self.start(job)
+        return self.wait()
+
+
+class Session(SessionLifetime):
     """One native session. Use as a context manager or call close()."""
 
     def __init__(self, vertices, triangles):
@@ -202,17 +224,10 @@ class Session:
             self._lib.qgp_session_free(self._handle)
             self._handle = ctypes.c_void_p()
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-    def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
+    @property
+    def alive(self):
+        """False once closed (an in-process session cannot die on its own)."""
+        return getattr(self, "_handle", None) is not None and bool(self._handle.value)
 
     def _check(self, status):
         if status != OK:
@@ -250,11 +265,6 @@ class Session:
         if state.value != STATE_RUNNING:
             self._check(status)
         return state.value
-
-    def run(self, job):
-        """Starts a job and waits for it (synchronous use)."""
-        self.start(job)
-        return self.wait()
 
     # -- results --
     def report(self):

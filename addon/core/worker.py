@@ -65,7 +65,7 @@ def python_executable():
     return sys.executable
 
 
-class WorkerSession:
+class WorkerSession(binding.SessionLifetime):
     """A binding.Session living in its own process. Use as a context manager or call close()."""
 
     def __init__(self, vertices, triangles):
@@ -102,12 +102,16 @@ class WorkerSession:
     def alive(self):
         return self._process is not None and self._process.poll() is None
 
-    def _died(self):
+    def _reap(self):
+        """Waits up to 10 s for the child to end, then kills it; its exit status."""
         try:
-            code = self._process.wait(timeout=10)
+            return self._process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             self._process.kill()
-            code = self._process.wait()
+            return self._process.wait()
+
+    def _died(self):
+        code = self._reap()
         if code < 0:
             try:
                 how = f"was killed by {signal.Signals(-code).name}"
@@ -146,27 +150,11 @@ class WorkerSession:
             self._conn.close()
             self._conn = None
         if self._process is not None:
-            try:
-                self._process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self._process.kill()
-                self._process.wait()
+            self._reap()
             self._process = None
         if self._log is not None:
             self._log.close()
             self._log = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-    def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
 
     # -- binding.Session's interface, forwarded --
     def set_option(self, name, value):
@@ -189,10 +177,6 @@ class WorkerSession:
 
     def wait(self, timeout=-1.0):
         return self._call("wait", timeout)
-
-    def run(self, job):
-        self.start(job)
-        return self.wait()
 
     def report(self):
         return self._call("report")

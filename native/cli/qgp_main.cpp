@@ -50,11 +50,20 @@ void exit_during_pipeline() {
   _exit(4);
 }
 
+// Sets g_pipeline_running for the lifetime of a pipeline run (also when it throws).
+struct PipelineRunning {
+  PipelineRunning() { g_pipeline_running = true; }
+  ~PipelineRunning() { g_pipeline_running = false; }
+};
+
 void fatal_signal(int sig) {
-  write_stderr(sig == SIGSEGV ? "qgp: internal error: crashed (SIGSEGV); no output was written\n"
-               : sig == SIGABRT ? "qgp: internal error: aborted (SIGABRT); no output was written\n"
-               : sig == SIGBUS ? "qgp: internal error: crashed (SIGBUS); no output was written\n"
-                               : "qgp: internal error: crashed (SIGFPE); no output was written\n");
+  const char* what = sig == SIGSEGV   ? "crashed (SIGSEGV)"
+                     : sig == SIGABRT ? "aborted (SIGABRT)"
+                     : sig == SIGBUS  ? "crashed (SIGBUS)"
+                                      : "crashed (SIGFPE)";
+  write_stderr("qgp: internal error: ");
+  write_stderr(what);
+  write_stderr("; no output was written\n");
   signal(sig, SIG_DFL);
   raise(sig);
 }
@@ -290,12 +299,12 @@ int run(const CommandLine& cl) {
     if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
     session->set_options(options);
     qgp::Progress progress;
-    g_pipeline_running = true;
-    session->run(cl.command == "info" ? qgp::Job::Intake : qgp::Job::Remesh, progress);
-    g_pipeline_running = false;
+    {
+      PipelineRunning running;
+      session->run(cl.command == "info" ? qgp::Job::Intake : qgp::Job::Remesh, progress);
+    }
     report = session->report();
   } catch (const qgp::Error& e) {
-    g_pipeline_running = false;
     report = session ? session->report() : qgp::Json::object();
     report["status"] = "error";
     report["error"] = {{"code", qgp::error_code_name(e.code())}, {"message", e.what()}};
@@ -341,7 +350,6 @@ int main(int argc, char** argv) {
   try {
     return run(cl);
   } catch (const std::exception& e) {
-    g_pipeline_running = false;
     std::cerr << "qgp: internal error: " << e.what() << "\n";
     return 4;
   }
