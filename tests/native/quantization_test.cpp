@@ -538,6 +538,32 @@ TEST(Quantization, CoarseScalesProduceZeroEdgesAndStayValid) {
   }
 }
 
+// Zero edges of a coarse run, given a minimum length of 1, come out positive on the next run; the
+// result keeps every invariant and no marked edge is zero.
+TEST(Quantization, MinimumLengthKeepsMarkedEdgesPositive) {
+  for (const Family& family : families()) {
+    const TMesh tm = family.make(300, 2);
+    const double scale = quantization_scale_for_quads(tm, 60);
+    const QuantizationResult first = run_greedy(tm, scale);
+    ASSERT_GT(first.zero_edges, 0) << family.name;
+    QuantizationOptions options;
+    options.scale = scale;
+    options.min_length.assign(tm.edges.size(), 0);
+    int marked = 0;
+    for (size_t e = 0; e < tm.edges.size(); ++e)
+      if (first.x[e] == 0 && marked < first.zero_edges / 2 + 1) options.min_length[e] = 1, ++marked;
+    Progress progress;
+    const QuantizationResult second = quantize(tm, options, progress);
+    expect_result_invariants(tm, second, family.name + " min length");
+    for (size_t e = 0; e < tm.edges.size(); ++e)
+      if (options.min_length[e]) EXPECT_GE(second.x[e], 1) << family.name << " edge " << e;
+  }
+  QuantizationOptions wrong;
+  wrong.min_length.assign(3, 0);
+  Progress progress;
+  EXPECT_THROW(quantize(families()[0].make(300, 2), wrong, progress), Error);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The `round` baseline's map: independent variables rounded, the map solved again.
 

@@ -14,8 +14,10 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "intake/read_mesh_file.h"
+#include "intake/working_mesh.h"
 #include "pipeline/session.h"
 #include "quad_extraction/polygon_metrics.h"
+#include "quad_extraction/surface_projection.h"
 #include "test_support.h"
 
 namespace qgp {
@@ -128,6 +130,46 @@ TEST(SessionPipeline, NewDensityOnlyRequantizes) {
   const double ratio = static_cast<double>(session.quad_result()->num_quads()) / coarse;
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.3);
+}
+
+// A dense input (face.obj, 51 712 triangles) is remeshed on a decimated working mesh; the quads
+// lie on the input surface, a new density reuses the working mesh, and grid UVs (which belong to
+// the input triangles) use the full mesh.
+TEST(SessionPipeline, DenseMeshUsesAWorkingMeshAndKeepsItsSurface) {
+  Session session(read_mesh_file(test::mesh_path("face.obj")));
+  RemeshOptions options;
+  options.target_faces = 500;
+  session.set_options(options);
+  Progress first;
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, first, &message), kCompleted) << message;
+  const Json& w = session.report()["working_mesh"];
+  EXPECT_EQ(w["decimated_components"], 1);
+  EXPECT_EQ(w["input_faces"], 51712);
+  EXPECT_LE(w["working_faces"].get<int>(), kMinWorkingFaces + 2);
+  expect_valid_output("face", session, -1);
+  // Every quad vertex on the input surface (the boundary included).
+  const TriMesh& input = session.intake()->mesh;
+  const TriangleBvh bvh(input);
+  const QuadMesh& quads = *session.quad_result();
+  double worst = 0;
+  for (int v = 0; v < quads.num_vertices(); ++v)
+    worst = std::max(worst, bvh.closest_point(quads.V.row(v).transpose()).squared_distance);
+  EXPECT_LE(std::sqrt(worst), 1e-9 * input.bounding_box_diagonal());
+
+  options.target_faces = 1500;
+  session.set_options(options);
+  StageCounter counter;
+  Progress second = counter.progress();
+  ASSERT_EQ(run_job(session, Job::Remesh, second, &message), kCompleted) << message;
+  for (const char* stage : {"working_mesh", "cross_field", "seamless_map", "tmesh"})
+    EXPECT_EQ(counter.updates[stage], 0) << stage << " ran again";
+  expect_valid_output("face", session, -1);
+
+  Progress third;
+  ASSERT_EQ(run_job(session, Job::GridUV, third, &message), kCompleted) << message;
+  EXPECT_EQ(session.report()["working_mesh"]["decimated_components"], 0);
+  for (double c : session.corner_uv()) EXPECT_TRUE(std::isfinite(c));
 }
 
 TEST(SessionPipeline, GridUvJobGivesIntegerSeamsAndNoQuads) {

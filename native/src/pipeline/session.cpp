@@ -8,8 +8,10 @@
 #include "core/error.h"
 #include "core/sanitize_isolines.h"
 #include "core/timer.h"
+#include "intake/working_mesh.h"
 #include "pipeline/split_faces.h"
 #include "quad_extraction/quad_metrics.h"
+#include "quad_extraction/surface_projection.h"
 #include "quantization/round_quantization.h"
 #include "tmesh/tmesh_system.h"
 #include "tmesh/trace_tmesh.h"
@@ -93,8 +95,33 @@ double Session::target_edge_length() const {
   return std::sqrt(area / faces);
 }
 
-void Session::prepare_components() {
-  if (!components_.empty()) return;
+int Session::component_face_budget(int component) const {
+  const double edge_length = target_edge_length();
+  double area = 0;
+  const TriMesh& m = intake_->mesh;
+  for (int f : intake_->components[component].faces) area += 0.5 * m.face_normal_unnormalized(f).norm();
+  return working_face_budget(area / (edge_length * edge_length));
+}
+
+bool Session::cached_components_fit(Job job) const {
+  if (components_.empty()) return false;
+  for (size_t c = 0; c < components_.size(); ++c) {
+    const ComponentState& state = components_[c];
+    if (!state.full_mesh) continue;
+    // Grid UVs belong to the input triangles. A new density reuses the working mesh (only
+    // quantization and later stages run again) unless it needs a much finer one.
+    if (job != Job::Remesh ||
+        component_face_budget(static_cast<int>(c)) > kMaxWorkingBudgetGrowth * state.working_face_budget)
+      return false;
+  }
+  return true;
+}
+
+void Session::prepare_components(Job job, Progress& progress) {
+  if (cached_components_fit(job)) return;
+  Timer timer;
+  progress.begin_stage("working_mesh");
+  components_.clear();
   int unmatched = 0;
   const std::vector<char> features = map_input_edges(*intake_, options_.feature_edges, &unmatched);
   components_.resize(intake_->components.size());
@@ -109,13 +136,40 @@ void Session::prepare_components() {
       if (features[intake_->mesh.edge_of[global_h]]) caller[state.mesh.edge_of[h]] = 1;
     }
     state.feature_edges = detect_feature_edges(state.mesh, caller, options_.sharp_angle_deg);
+    if (job == Job::Remesh) {
+      state.working_face_budget = component_face_budget(static_cast<int>(c));
+      WorkingMesh working = make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, progress);
+      if (working.decimated) {
+        for (int& v : working.vertex_of_input) v = state.vertex_map[v];
+        state.full_mesh = std::move(state.mesh);
+        state.full_face_map = std::move(state.face_map);
+        state.full_feature_edges = std::move(state.feature_edges);
+        state.mesh = std::move(working.mesh);
+        state.vertex_map = std::move(working.vertex_of_input);
+        state.face_map.assign(state.mesh.num_faces(), -1);
+        state.feature_edges = std::move(working.feature_edges);
+      }
+    }
     split += split_overconstrained_faces(state.mesh, state.feature_edges, state.vertex_map, state.face_map);
+    progress.update(static_cast<double>(c + 1) / components_.size());
   }
   split_faces_ = split;
   unmatched_features_ = unmatched;
+  report_["timings_s"]["working_mesh"] = timer.seconds();
 }
 
 void Session::report_component_preparation() {
+  int decimated = 0, input_faces = 0, working_faces = 0;
+  for (const ComponentState& state : components_) {
+    decimated += state.full_mesh.has_value();
+    input_faces += state.full_mesh ? state.full_mesh->num_faces() : state.mesh.num_faces();
+    working_faces += state.mesh.num_faces();
+  }
+  report_["working_mesh"] = {{"decimated_components", decimated},
+                             {"input_faces", input_faces},
+                             {"working_faces", working_faces},
+                             {"faces_per_quad", kWorkingFacesPerQuad},
+                             {"min_faces", kMinWorkingFaces}};
   if (split_faces_ > 0)
     report_["input"]["repairs"].push_back({{"kind", "split_overconstrained_faces"}, {"count", split_faces_}});
   if (unmatched_features_ > 0)
@@ -194,7 +248,7 @@ void Session::run_field_stages(Progress& progress) {
 }
 
 void Session::run_remesh_stages(Job job, Progress& progress) {
-  prepare_components();
+  prepare_components(job, progress);
   report_component_preparation();
   run_field_stages(progress);
   run_seamless_stage(progress);
@@ -284,6 +338,47 @@ void Session::run_tmesh_stage(Progress& progress) {
   report_["tmesh"] = std::move(total);
 }
 
+namespace {
+
+// Zero T-edges (x = 0) whose collapse folds the quad layout: those on the sides of the cells whose
+// layout quads are not manifold, and of the cells up to `rings` cells away. Empty when the
+// layout is a manifold quad mesh (the connectivity every map with this quantization gives).
+std::vector<int> folding_zero_edges(const ComponentState& state, int rings) {
+  Progress quiet;
+  const TMesh& tm = *state.tmesh;
+  const std::vector<int64_t>& x = state.quantization->x;
+  const LayoutQuads layout = extract_layout_quads(state.mesh, *state.exact_seamless, tm, x, quiet, false);
+  const std::vector<char> bad = non_manifold_quads(layout.quads);
+  std::vector<char> in_region(tm.cells.size(), 0);
+  std::vector<int> region;
+  for (size_t q = 0; q < bad.size(); ++q)
+    if (bad[q] && !in_region[layout.quad_cell[q]]) {
+      in_region[layout.quad_cell[q]] = 1;
+      region.push_back(layout.quad_cell[q]);
+    }
+  if (region.empty()) return {};
+  for (int ring = 0, begin = 0; ring < rings; ++ring) {
+    const int end = static_cast<int>(region.size());
+    for (int i = begin; i < end; ++i)
+      for (const auto& side : tm.cells[region[i]].sides)
+        for (int e : side)
+          for (int c : tm.edges[e].cells)
+            if (c >= 0 && !in_region[c]) {
+              in_region[c] = 1;
+              region.push_back(c);
+            }
+    begin = end;
+  }
+  std::vector<int> edges;
+  for (int c : region)
+    for (const auto& side : tm.cells[c].sides)
+      for (int e : side)
+        if (x[e] == 0) edges.push_back(e);
+  return edges;
+}
+
+}  // namespace
+
 void Session::run_quantization_stage(Progress& progress) {
   const double edge_length = target_edge_length();
   Json per_component = Json::array();
@@ -299,6 +394,20 @@ void Session::run_quantization_stage(Progress& progress) {
       options.scale = scale;
       if (options_.quantizer == Quantizer::Greedy) {
         state.quantization = quantize(*state.tmesh, options, progress);
+        // Valid quantizations (singularities apart) can still collapse cells so that the layout
+        // folds: a regular point between two quads only, two quads on both sides of one edge. Keep
+        // the zero edges there (and in a widening ring around) at length 1 and quantize again.
+        state.positive_edges = 0;
+        state.fold_rounds = 0;
+        for (int round = 0; round < kMaxFoldRounds; ++round) {
+          const std::vector<int> edges = folding_zero_edges(state, round);
+          if (edges.empty()) break;
+          options.min_length.resize(state.tmesh->edges.size(), 0);
+          for (int e : edges) options.min_length[e] = 1;
+          state.quantization = quantize(*state.tmesh, options, progress);
+          state.fold_rounds = round + 1;
+        }
+        for (int64_t m : options.min_length) state.positive_edges += static_cast<int>(m);
       } else {
         // The rounding baseline: its rounded map is the integer-grid map (when it is valid).
         options.method = QuantizationMethod::Round;
@@ -324,6 +433,8 @@ void Session::run_quantization_stage(Progress& progress) {
     }
     quads += state.quantization->quads_expected;
     per_component.push_back(quantization_report(*state.quantization));
+    per_component.back()["fold_rounds"] = state.fold_rounds;
+    per_component.back()["kept_positive_edges"] = state.positive_edges;
   });
   report_["quantization"] = {{"method", quantizer_name(options_.quantizer)},
                              {"quads_expected", quads},
@@ -431,6 +542,18 @@ void Session::run_quad_stage(Progress& progress) {
         state.layout_stats = layout.stats;
       }
       state.untangle_stats = untangle_flipped_quads(state.quads->quads, state.mesh, state.field->feature_edge, progress);
+      if (state.full_mesh) {
+        // Back onto the input surface, then unfold what the projection folded.
+        QuadMesh& quads = state.quads->quads;
+        project_to_surface(quads, *state.full_mesh, progress);
+        quads.quad_face.resize(quads.num_quads());
+        for (int q = 0; q < quads.num_quads(); ++q) quads.quad_face[q] = quads.vertex_face[quads.Q(q, 0)];
+        const UntangleStats projected =
+            untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
+        state.untangle_stats.flipped_after = projected.flipped_after;
+        state.untangle_stats.moved_vertices += projected.moved_vertices;
+        state.untangle_stats.seconds += projected.seconds;
+      }
     }
     Json stats = quad_extraction_stats_json(state.quads->stats);
     stats["path"] = state.quads_path;
@@ -456,6 +579,7 @@ void Session::collect_results(Job job, Progress& progress) {
   corner_uv_.assign(static_cast<size_t>(input_.num_faces()) * 6, std::numeric_limits<double>::quiet_NaN());
   std::set<std::array<int, 2>> cuts;
   for (const ComponentState& state : components_) {
+    if (state.full_mesh) continue;  // the map lives on the working mesh, not on the input triangles
     const ExactParametrization& igm = *state.igm;
     auto input_vertex = [&](int v) {
       const int iv = state.vertex_map[v];
@@ -495,7 +619,8 @@ void Session::collect_results(Job job, Progress& progress) {
     append_quad_mesh(*quads_, state.quads->quads, static_cast<int>(c));
     for (int q = 0; q < state.quads->quads.num_quads(); ++q) {
       const int f = state.quads->quads.quad_face.empty() ? -1 : state.quads->quads.quad_face[q];
-      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[state.face_map[f]]);
+      const std::vector<int>& face_map = state.full_mesh ? state.full_face_map : state.face_map;
+      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[face_map[f]]);
     }
   }
   QuadMetricsOptions metric_options;

@@ -27,10 +27,16 @@ enum class Job { Intake, Remesh, GridUV };
 
 // One connected component on its way through the pipeline; later stages add their results here.
 struct ComponentState {
-  TriMesh mesh;                     // the component as its own mesh
+  TriMesh mesh;                     // the component as its own mesh (the working mesh if decimated)
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
-  std::vector<int> face_map;        // component face -> intake mesh face
+  std::vector<int> face_map;        // component face -> intake mesh face (-1 when decimated)
   std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
+  // A dense component of a remesh job is decimated to a working resolution for the target; the
+  // quads are projected back onto the full-resolution component kept here.
+  std::optional<TriMesh> full_mesh;
+  std::vector<int> full_face_map;        // full_mesh face -> intake mesh face
+  std::vector<char> full_feature_edges;  // #E of full_mesh
+  int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)
   std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
   std::optional<CutGraph> cut;      // stage 1b
   std::optional<SeamlessMap> seamless;  // stage 1c: 1 uv unit = seamless_edge_length; computed
@@ -42,6 +48,8 @@ struct ComponentState {
   // Stage 3: integer T-edge lengths for quantization_scale (quads per seamless uv unit).
   std::optional<QuantizationResult> quantization;
   double quantization_scale = 0;
+  int fold_rounds = 0;                  // re-quantizations that kept folding zero edges at 1
+  int positive_edges = 0;               // T-edges kept at length >= 1 by them
   Quantizer quantizer = Quantizer::Greedy;
   // Stage 4: the integer-grid map (1 unit = 1 quad) and stage 5: its quads.
   std::optional<ExactParametrization> igm;
@@ -52,6 +60,11 @@ struct ComponentState {
   LayoutQuadsStats layout_stats;        // when the quads come from the T-mesh layout
   UntangleStats untangle_stats;         // flipped quads unfolded after extraction
 };
+
+// A remesh job at a new density keeps a decimated working mesh until the density needs a budget
+// more than this many times the one it was made for.
+constexpr int kMaxWorkingBudgetGrowth = 4;
+constexpr int kMaxFoldRounds = 8;  // re-quantizations against a folding layout
 
 class Session {
  public:
@@ -85,7 +98,9 @@ class Session {
 
  private:
   void run_intake_stage(Progress& progress);
-  void prepare_components();
+  void prepare_components(Job job, Progress& progress);
+  bool cached_components_fit(Job job) const;
+  int component_face_budget(int component) const;
   void report_component_preparation();
   void run_remesh_stages(Job job, Progress& progress);
   void run_field_stages(Progress& progress);

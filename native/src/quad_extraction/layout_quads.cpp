@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <string>
 
@@ -157,7 +158,7 @@ std::array<OrientedSide, 4> orient_cell(const TMesh& tm, int c) {
 }  // namespace
 
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
-                                 const std::vector<int64_t>& x, Progress& progress) {
+                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions) {
   Timer timer;
   const int ne = static_cast<int>(tm.edges.size());
   if (static_cast<int>(x.size()) != ne)
@@ -187,6 +188,10 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   }
   std::vector<std::vector<GridPoint>> on_edge(ne);  // the x + 1 points of each edge, from -> to
   for (int e = 0; e < ne; ++e) {
+    if (!with_positions) {
+      on_edge[e].assign(x[e] + 1, GridPoint{});
+      continue;
+    }
     place_edge_points(mesh, tm, e, x[e], on_edge[e]);
     for (int64_t k = 1; k < x[e]; ++k) points[edge_point(e, k)] = on_edge[e][k];
     if (e % 256 == 0) progress.check_cancel();
@@ -266,7 +271,7 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
     const double W = 0.5 * (length[0] + length[2]), H = 0.5 * (length[1] + length[3]);
     auto normalized = [](double d, double total) { return total > 0 ? d / total : 0.0; };
     auto pos = [&](int64_t i, int64_t j) { return points[boundary(i, j).id].position; };
-    for (int64_t j = 1; j < h; ++j)
+    for (int64_t j = 1; j < h && with_positions; ++j)
       for (int64_t i = 1; i < w; ++i) {
         const double s = static_cast<double>(i) / w, t = static_cast<double>(j) / h;
         GridPoint& g = points[id(i, j)];
@@ -292,7 +297,10 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
                       s * t * pos(w, h));
       }
     for (int64_t j = 0; j < h; ++j)
-      for (int64_t i = 0; i < w; ++i) quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      for (int64_t i = 0; i < w; ++i) {
+        quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+        result.quad_cell.push_back(c);
+      }
     if (c % 64 == 0) progress.check_cancel();
   }
   progress.update(0.4);
@@ -344,15 +352,16 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
     for (int k = 0; k < 4; ++k) out.Q(static_cast<int>(q), k) = used[vertex_of[quads[q][k]]];
 
   // Points placed by the Coons fallback or averaged by a collapse: onto the surface.
-  const TriangleBvh bvh(mesh);
-  auto project = [&](int v) {
-    const TriangleBvh::Hit hit = bvh.closest_point(out.V.row(v).transpose());
-    if (hit.triangle < 0) return;
-    out.V.row(v) = hit.point.transpose();
-    out.vertex_face[v] = hit.triangle;
-  };
-  for (int v = 0; v < nv; ++v)
-    if (out.vertex_face[v] < 0) project(v);
+  if (with_positions) {
+    const TriangleBvh bvh(mesh);
+    for (int v = 0; v < nv; ++v) {
+      if (out.vertex_face[v] >= 0) continue;
+      const TriangleBvh::Hit hit = bvh.closest_point(out.V.row(v).transpose());
+      if (hit.triangle < 0) continue;
+      out.V.row(v) = hit.point.transpose();
+      out.vertex_face[v] = hit.triangle;
+    }
+  }
   out.quad_face.resize(out.num_quads());
   for (int q = 0; q < out.num_quads(); ++q) out.quad_face[q] = out.vertex_face[out.Q(q, 0)];
   result.stats.seconds = timer.seconds();
@@ -366,6 +375,28 @@ Json layout_quads_stats_json(const LayoutQuadsStats& s) {
               {"merged_points", s.merged_points},
               {"walk_failures", s.walk_failures},
               {"seconds", s.seconds}};
+}
+
+std::vector<char> non_manifold_quads(const QuadMesh& quads) {
+  const int nq = quads.num_quads();
+  std::vector<char> bad(nq, 0);
+  std::map<std::pair<int, int>, std::vector<int>> uses;  // undirected edge -> quads (sign: direction)
+  for (int q = 0; q < nq; ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      if (a == b) {
+        bad[q] = 1;
+        continue;
+      }
+      uses[std::minmax(a, b)].push_back(a < b ? q + 1 : -(q + 1));
+    }
+  for (const auto& [edge, list] : uses) {
+    bool broken = list.size() > 2;
+    if (list.size() == 2) broken = (list[0] > 0) == (list[1] > 0);
+    if (broken)
+      for (int signed_q : list) bad[std::abs(signed_q) - 1] = 1;
+  }
+  return bad;
 }
 
 }  // namespace qgp

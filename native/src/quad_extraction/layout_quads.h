@@ -34,17 +34,23 @@ struct LayoutQuadsStats {
 
 struct LayoutQuads {
   QuadMesh quads;  // vertex_face (working-mesh triangle), vertex_singular and quad_face are filled
+  std::vector<int> quad_cell;  // #Q: the T-mesh cell each quad belongs to
   LayoutQuadsStats stats;
 };
 
 // mesh: working triangle mesh (the T-mesh's traces refer to its faces); seamless: the exact map the
 // T-mesh was traced in (its traces' uv are in its charts); tmesh: the T-mesh with
 // four-sided cells; x: #edges integer lengths with Ax = 0 and x >= 0 (a valid quantization).
+// with_positions false: the connectivity only (every position zero, vertex_face -1; much faster).
 // Throws Error(InvalidArgument) on mismatched sizes or a cell whose opposite sides differ,
 // Error(Cancelled) on cancel.
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tmesh,
-                                 const std::vector<int64_t>& x, Progress& progress);
+                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions = true);
 
 Json layout_quads_stats_json(const LayoutQuadsStats& stats);
+
+// Quads that make a mesh non-manifold: with a repeated corner, or with an edge that more than
+// two quads share or that two quads run in the same direction. #Q flags.
+std::vector<char> non_manifold_quads(const QuadMesh& quads);
 
 }  // namespace qgp

@@ -38,6 +38,9 @@ struct QuantizationOptions {
   // records explored regions per cluster of 16 edges instead of per edge (same result, more
   // generating-vector searches).
   int64_t cache_budget = int64_t(1) << 24;
+  // Per T-edge lower bound of x in stage II (empty: 0 everywhere; otherwise #edges values of 0 or
+  // 1). The session raises it to 1 on zero edges whose collapse folds the quad layout.
+  std::vector<int64_t> min_length;
   // Tests: recompute the full objective from scratch after every accepted stage II step (O(#edges)
   // each) instead of recording the incrementally updated value.
   bool recompute_objective_each_step = false;

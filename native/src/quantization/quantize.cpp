@@ -68,6 +68,7 @@ class GreedyQuantizer {
     eta_ = std::max(1, E);
     ideal_.resize(E);
     for (int e = 0; e < E; ++e) ideal_[e] = std::max(options.scale * tmesh.edges[e].length, options.min_ideal_length);
+    min_length_ = options.min_length.empty() ? std::vector<int64_t>(E, 0) : options.min_length;
     x_.assign(E, 0);
     change_index_.assign(E, 0);
     w_plus_.resize(E);
@@ -111,7 +112,7 @@ class GreedyQuantizer {
  private:
   void update_weights(int e) {
     w_plus_[e] = tier_weight(ideal_[e] - static_cast<double>(x_[e]), eta_);
-    w_minus_[e] = x_[e] == 0 ? kInf : tier_weight(static_cast<double>(x_[e]) - ideal_[e], eta_);
+    w_minus_[e] = x_[e] <= min_length_[e] ? kInf : tier_weight(static_cast<double>(x_[e]) - ideal_[e], eta_);
   }
   double full_objective() const {
     double sum = 0;
@@ -252,7 +253,7 @@ class GreedyQuantizer {
       collect_changes(dnodes_, sign);
       for (const Change& c : changes_) strong.push_back(c.edge);
       bool feasible = true;
-      for (const Change& c : changes_) feasible = feasible && x_[c.edge] + c.delta >= 0;
+      for (const Change& c : changes_) feasible = feasible && x_[c.edge] + c.delta >= std::min(min_length_[c.edge], x_[c.edge]);
       double approx = 0;
       if (!feasible || objective_change_sign(changes_, x_, ideal_, &approx) >= 0) {
         ++r.stage2_not_improving;
@@ -378,6 +379,7 @@ class GreedyQuantizer {
   ValidityChecker validity_;
   double eta_ = 1;
   std::vector<double> ideal_, w_plus_, w_minus_;
+  std::vector<int64_t> min_length_;
   std::vector<int64_t> x_;
   double objective_ = 0;
   int64_t searches_ = 0;
@@ -401,6 +403,10 @@ QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& optio
   if (!(options.scale > 0) || !std::isfinite(options.scale))
     throw Error(ErrorCode::InvalidArgument, "quantization: the scale must be a positive finite number");
   if (options.cache_budget < 0) throw Error(ErrorCode::InvalidArgument, "quantization: negative cache budget");
+  if (!options.min_length.empty() && options.min_length.size() != tmesh.edges.size())
+    throw Error(ErrorCode::InvalidArgument, "quantization: min_length must have one value per T-edge");
+  for (int64_t m : options.min_length)
+    if (m < 0 || m > 1) throw Error(ErrorCode::InvalidArgument, "quantization: min_length values must be 0 or 1");
   if (!(options.min_ideal_length > 0))
     throw Error(ErrorCode::InvalidArgument, "quantization: min_ideal_length must be positive");
   if (options.method != QuantizationMethod::Greedy)

@@ -1,0 +1,123 @@
+// The working mesh of dense components: over every manifold mesh of the shared set, decimated to
+// a small budget it keeps the topology, every feature and boundary edge, the input positions of
+// its vertices and the shape; below the budget it is the input itself.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <map>
+
+#include "cross_field/cross_field.h"
+#include "intake/working_mesh.h"
+#include "quad_extraction/surface_projection.h"
+#include "test_support.h"
+
+namespace qgp {
+namespace {
+
+// Largest distance from a vertex or face centroid of `from` to the surface of `to`, relative to
+// from's diagonal.
+double one_sided_distance(const TriMesh& from, const TriMesh& to) {
+  const TriangleBvh bvh(to);
+  double worst = 0;
+  for (int v = 0; v < from.num_vertices(); ++v)
+    worst = std::max(worst, bvh.closest_point(from.position(v)).squared_distance);
+  for (int f = 0; f < from.num_faces(); ++f) {
+    const Vec3 centroid = (from.position(from.F(f, 0)) + from.position(from.F(f, 1)) + from.position(from.F(f, 2))) / 3;
+    worst = std::max(worst, bvh.closest_point(centroid).squared_distance);
+  }
+  return std::sqrt(worst) / from.bounding_box_diagonal();
+}
+
+class WorkingMeshOverMeshes : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(WorkingMeshOverMeshes, KeepsTopologyFeaturesAndShape) {
+  const std::string name = GetParam();
+  const IntakeResult intake = test::load_mesh(name);
+  const TriMesh mesh = test::component_mesh(intake, 0);
+  const std::vector<char> features = detect_feature_edges(mesh, {}, 40);
+  const int budget = std::max(200, mesh.num_faces() / 4);
+  Progress progress;
+  const WorkingMesh w = make_working_mesh(mesh, features, budget, progress);
+  std::cout << name << ": " << mesh.num_faces() << " -> " << w.mesh.num_faces() << " faces (budget " << budget
+            << ")" << std::endl;
+  if (!w.decimated) {
+    // Only when no vertex may go: every one lies on a feature (joint, block at 40 degrees).
+    std::vector<char> locked(mesh.num_vertices(), 0);
+    for (int e = 0; e < mesh.num_edges(); ++e)
+      if (features[e] || mesh.is_boundary_edge(e)) {
+        const int h = mesh.edge_halfedge[e];
+        locked[mesh.from(h)] = locked[mesh.to(h)] = 1;
+      }
+    int free_vertices = 0;
+    for (char l : locked) free_vertices += !l;
+    EXPECT_LT(free_vertices, mesh.num_vertices() / 20) << name;
+    return;
+  }
+  EXPECT_LT(w.mesh.num_faces(), mesh.num_faces()) << name;
+  const int chi = mesh.num_vertices() - mesh.num_edges() + mesh.num_faces();
+  EXPECT_EQ(w.mesh.num_vertices() - w.mesh.num_edges() + w.mesh.num_faces(), chi) << name;
+  EXPECT_EQ(count_boundary_loops(w.mesh), count_boundary_loops(mesh)) << name;
+  // Every kept vertex sits where it was in the input.
+  ASSERT_EQ(w.vertex_of_input.size(), static_cast<size_t>(w.mesh.num_vertices()));
+  for (int v = 0; v < w.mesh.num_vertices(); ++v) {
+    const int iv = w.vertex_of_input[v];
+    ASSERT_GE(iv, 0);
+    ASSERT_LT(iv, mesh.num_vertices());
+    EXPECT_EQ(w.mesh.position(v), mesh.position(iv)) << name;
+  }
+  // Feature and boundary edges of the input are edges of the working mesh, flagged the same way.
+  std::map<std::pair<int, int>, int> working_edge;
+  for (int e = 0; e < w.mesh.num_edges(); ++e) {
+    const int h = w.mesh.edge_halfedge[e];
+    working_edge[std::minmax(w.vertex_of_input[w.mesh.from(h)], w.vertex_of_input[w.mesh.to(h)])] = e;
+  }
+  int input_features = 0, working_features = 0;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    if (!features[e] && !mesh.is_boundary_edge(e)) continue;
+    const int h = mesh.edge_halfedge[e];
+    const auto it = working_edge.find(std::minmax(mesh.from(h), mesh.to(h)));
+    ASSERT_NE(it, working_edge.end()) << name << ": input edge " << e << " is gone";
+    EXPECT_EQ(w.feature_edges[it->second], features[e]) << name;
+    EXPECT_EQ(w.mesh.is_boundary_edge(it->second), mesh.is_boundary_edge(e)) << name;
+    input_features += features[e];
+  }
+  for (char f : w.feature_edges) working_features += f;
+  EXPECT_EQ(working_features, input_features) << name;
+  // The shape: both ways within 3% of the diagonal at a quarter of the faces (dragon's spikes:
+  // 2.6%; smooth scans a tenth of that).
+  const double to_working = one_sided_distance(mesh, w.mesh), to_input = one_sided_distance(w.mesh, mesh);
+  std::cout << name << ": distance input -> working " << to_working << ", working -> input " << to_input << std::endl;
+  EXPECT_LT(to_working, 0.03) << name;
+  EXPECT_LT(to_input, 0.03) << name;
+}
+
+TEST_P(WorkingMeshOverMeshes, IsTheInputBelowTheBudget) {
+  const IntakeResult intake = test::load_mesh(GetParam());
+  const TriMesh mesh = test::component_mesh(intake, 0);
+  Progress progress;
+  const int budget = static_cast<int>(std::ceil(mesh.num_faces() / kDecimateAboveBudget));
+  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  EXPECT_FALSE(w.decimated);
+  EXPECT_EQ(w.mesh.F, mesh.F);
+  EXPECT_EQ(w.mesh.V, mesh.V);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shared, WorkingMeshOverMeshes, ::testing::ValuesIn(test::manifold_mesh_files()),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           for (char& c : n)
+                             if (!isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return n;
+                         });
+
+TEST(WorkingMeshBudget, FivePerQuadAboveTheFloor) {
+  EXPECT_EQ(working_face_budget(8000), 40000);
+  EXPECT_EQ(working_face_budget(100), kMinWorkingFaces);
+  EXPECT_EQ(working_face_budget(0), kMinWorkingFaces);
+  EXPECT_EQ(working_face_budget(1e6), kWorkingFacesPerQuad * 1000000);
+  EXPECT_EQ(working_face_budget(1e12), 1000000000);
+}
+
+}  // namespace
+}  // namespace qgp
