@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <iostream>
 
 #include "core/error.h"
@@ -166,10 +165,6 @@ TEST(LayoutMeshes, FieldSeamlessTMeshAndQuantizationInvariants) {
   std::cout << kHeader << " round\n";
   SweepCounts counts;
   for (const std::string& name : test::manifold_mesh_files()) {
-    // dragon-genus1 (a noisy scan, ~2100 singularities) spends far more than ten minutes in the
-    // seamless map's Ipopt repair at a 100-quad target and keeps flipped triangles; it runs only
-    // when QGP_TEST_MESHES names it.
-    if (name == "dragon-genus1.obj" && !std::getenv("QGP_TEST_MESHES")) continue;
     sweep_mesh(name, -1, true, false, counts);
   }
   std::cout << "round baseline: " << counts.round_invalid << " of " << counts.round_runs
