@@ -13,6 +13,8 @@
 #include "core/error.h"
 #include "core/parametrization.h"
 #include "core/sanitize_isolines.h"
+#include "intake/read_mesh_file.h"
+#include "pipeline/session.h"
 #include "polycube.h"
 #include "quad_map.h"
 #include "test_support.h"
@@ -692,6 +694,39 @@ TEST(TMesh, ObliqueQuadMapsOfClosedMeshes) {
   if (!kAllMeshes) return;
   quad_map_case("spot.obj", -1, {4, 3, 5});
   quad_map_case("kitten.obj", -1, {21, 20, 29});
+}
+
+// The pipeline's own T-meshes: the exact seamless map of every manifold mesh of the shared set
+// (on its working mesh where the session decimates), without and with features at 40 degrees on
+// the CAD meshes; every check of expect_valid, and a row of figures per mesh.
+void session_tmesh_cases(const std::string& name, double sharp_angle_deg) {
+  Session session(read_mesh_file(test::mesh_path(name)));
+  RemeshOptions options;
+  options.target_faces = 2000;
+  options.sharp_angle_deg = sharp_angle_deg;
+  session.set_options(options);
+  const std::string error = test::run_until_stage(session, "quantization");
+  ASSERT_EQ(error, "") << name;
+  for (size_t k = 0; k < session.components().size(); ++k) {
+    const ComponentState& state = session.components()[k];
+    Case c{name + (sharp_angle_deg > 0 ? " features" : ""), state.mesh, *state.exact_seamless, state.isoline_edges};
+    const TMesh& tm = *state.tmesh;
+    const TMeshCheck check = check_tmesh(tm);
+    std::printf("[session tmesh] %-32s %7d triangles, %4d singularities -> %6zu nodes %6zu edges %6zu cells, "
+                "%5d T-junctions, trace %.3f s\n",
+                c.name.c_str(), c.mesh.num_faces(), state.field->num_singularities, tm.nodes.size(), tm.edges.size(),
+                tm.cells.size(), check.t_junctions, tm.stats.trace_seconds);
+    expect_valid(c, tm);
+  }
+}
+
+TEST(TMesh, SessionMapsOfEveryManifoldMesh) {
+  for (const std::string& name : test::manifold_mesh_files()) {
+    if (!kAllMeshes && name != "spot.obj" && name != "joint.obj") continue;
+    session_tmesh_cases(name, -1);
+  }
+  for (const char* name : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj"})
+    if (kAllMeshes || std::string(name) == "joint.obj") session_tmesh_cases(name, 40);
 }
 
 TEST(TMesh, RandomlyBrokenMapsNeverCrashOrHang) {
