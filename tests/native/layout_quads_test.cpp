@@ -24,28 +24,6 @@ bool known_flips(const std::string& name) {
   return false;
 }
 
-QuadMesh quads_of(const std::vector<std::array<int, 4>>& faces, int num_vertices) {
-  QuadMesh q;
-  q.V = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>::Zero(num_vertices, 3);
-  q.Q.resize(static_cast<int>(faces.size()), 4);
-  for (size_t i = 0; i < faces.size(); ++i)
-    for (int k = 0; k < 4; ++k) q.Q(static_cast<int>(i), k) = faces[i][k];
-  return q;
-}
-
-TEST(NonManifoldQuads, FlagsEveryQuadOfABadEdgeOrCorner) {
-  // Two quads side by side: fine.
-  EXPECT_EQ(non_manifold_quads(quads_of({{0, 1, 4, 3}, {1, 2, 5, 4}}, 6)), std::vector<char>({0, 0}));
-  // A third quad on edge 1-4, and one running 1 -> 4 like the first: all of them flagged.
-  EXPECT_EQ(non_manifold_quads(quads_of({{0, 1, 4, 3}, {1, 2, 5, 4}, {4, 1, 6, 7}, {8, 9, 10, 11}}, 12)),
-            std::vector<char>({1, 1, 1, 0}));
-  EXPECT_EQ(non_manifold_quads(quads_of({{0, 1, 4, 3}, {2, 1, 4, 5}}, 6)), std::vector<char>({1, 1}));
-  // A repeated corner.
-  EXPECT_EQ(non_manifold_quads(quads_of({{0, 1, 1, 3}, {4, 5, 6, 7}}, 8)), std::vector<char>({1, 0}));
-  // A pillow of two quads glued along all four edges is a closed 2-manifold.
-  EXPECT_EQ(non_manifold_quads(quads_of({{0, 1, 4, 3}, {1, 0, 3, 4}}, 5)), std::vector<char>({0, 0}));
-}
-
 TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
   std::cout << "mesh | target | quads | collapsed cells | merged points | irregular | flipped | min scaled Jacobian | "
                "mean angle dev | Hausdorff | layout s\n";

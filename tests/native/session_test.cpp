@@ -108,6 +108,19 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   EXPECT_GT(session.cut_edges().size(), 0u);
 }
 
+// A remesh job with new options (a new density) that completes without running any stage before
+// quantization again (working mesh, field, cut graph, seamless map, T-mesh), and re-quantizes.
+void expect_remesh_only_requantizes(Session& session, const RemeshOptions& options) {
+  session.set_options(options);
+  StageCounter counter;
+  Progress progress = counter.progress();
+  std::string message;
+  ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
+  for (const char* stage : {"working_mesh", "cross_field", "cut_graph", "seamless_map", "tmesh"})
+    EXPECT_EQ(counter.updates[stage], 0) << stage << " ran again";
+  EXPECT_GT(counter.updates["quantization"], 0);
+}
+
 TEST(SessionPipeline, NewDensityOnlyRequantizes) {
   Session session(read_mesh_file(test::mesh_path("kitten.obj")));  // genus 1
   RemeshOptions options;
@@ -118,13 +131,7 @@ TEST(SessionPipeline, NewDensityOnlyRequantizes) {
   ASSERT_EQ(run_job(session, Job::Remesh, first, &message), kCompleted) << message;
   const int coarse = session.quad_result()->num_quads();
   options.target_faces = 3200;
-  session.set_options(options);
-  StageCounter counter;
-  Progress second = counter.progress();
-  ASSERT_EQ(run_job(session, Job::Remesh, second, &message), kCompleted) << message;
-  for (const char* stage : {"cross_field", "cut_graph", "seamless_map", "tmesh"})
-    EXPECT_EQ(counter.updates[stage], 0) << stage << " ran again";
-  EXPECT_GT(counter.updates["quantization"], 0);
+  expect_remesh_only_requantizes(session, options);
   const PolygonMeshMetrics m = expect_valid_output("kitten", session, -1);
   EXPECT_EQ(m.euler_characteristic, 0);
   const double ratio = static_cast<double>(session.quad_result()->num_quads()) / coarse;
@@ -158,12 +165,7 @@ TEST(SessionPipeline, DenseMeshUsesAWorkingMeshAndKeepsItsSurface) {
   EXPECT_LE(std::sqrt(worst), 1e-9 * input.bounding_box_diagonal());
 
   options.target_faces = 1500;
-  session.set_options(options);
-  StageCounter counter;
-  Progress second = counter.progress();
-  ASSERT_EQ(run_job(session, Job::Remesh, second, &message), kCompleted) << message;
-  for (const char* stage : {"working_mesh", "cross_field", "seamless_map", "tmesh"})
-    EXPECT_EQ(counter.updates[stage], 0) << stage << " ran again";
+  expect_remesh_only_requantizes(session, options);
   expect_valid_output("face", session, -1);
 
   Progress third;

@@ -9,6 +9,7 @@
 
 #include "cross_field/cross_field.h"
 #include "intake/working_mesh.h"
+#include "quad_extraction/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
 #include "test_support.h"
 
@@ -18,15 +19,12 @@ namespace {
 // Largest distance from a vertex or face centroid of `from` to the surface of `to`, relative to
 // from's diagonal.
 double one_sided_distance(const TriMesh& from, const TriMesh& to) {
-  const TriangleBvh bvh(to);
-  double worst = 0;
-  for (int v = 0; v < from.num_vertices(); ++v)
-    worst = std::max(worst, bvh.closest_point(from.position(v)).squared_distance);
-  for (int f = 0; f < from.num_faces(); ++f) {
-    const Vec3 centroid = (from.position(from.F(f, 0)) + from.position(from.F(f, 1)) + from.position(from.F(f, 2))) / 3;
-    worst = std::max(worst, bvh.closest_point(centroid).squared_distance);
-  }
-  return std::sqrt(worst) / from.bounding_box_diagonal();
+  std::vector<Vec3> samples;
+  for (int v = 0; v < from.num_vertices(); ++v) samples.push_back(from.position(v));
+  for (int f = 0; f < from.num_faces(); ++f)
+    samples.push_back((from.position(from.F(f, 0)) + from.position(from.F(f, 1)) + from.position(from.F(f, 2))) / 3);
+  Progress progress;
+  return max_distance(samples, TriangleBvh(to), progress) / from.bounding_box_diagonal();
 }
 
 class WorkingMeshOverMeshes : public ::testing::TestWithParam<std::string> {};

@@ -6,8 +6,8 @@
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <algorithm>
-#include <cmath>
 #include <map>
+#include <numeric>
 
 #include "core/error.h"
 
@@ -22,7 +22,7 @@ struct DoubleTraits : OpenMesh::DefaultTraits {
 };
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
-// The working mesh has the input's topology and carries every feature edge.
+// Same Euler characteristic and number of boundary loops.
 bool same_topology(const TriMesh& input, const TriMesh& working) {
   const int chi_in = input.num_vertices() - input.num_edges() + input.num_faces();
   const int chi_out = working.num_vertices() - working.num_edges() + working.num_faces();
@@ -38,14 +38,13 @@ int working_face_budget(double target_quads) {
 
 WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges, int max_faces,
                               Progress& progress) {
-  WorkingMesh out;
   auto keep_input = [&] {
-    out.mesh = mesh;
-    out.vertex_of_input.resize(mesh.num_vertices());
-    for (int v = 0; v < mesh.num_vertices(); ++v) out.vertex_of_input[v] = v;
-    out.feature_edges = feature_edges;
-    out.decimated = false;
-    return out;
+    WorkingMesh copy;
+    copy.mesh = mesh;
+    copy.vertex_of_input.resize(mesh.num_vertices());
+    std::iota(copy.vertex_of_input.begin(), copy.vertex_of_input.end(), 0);
+    copy.feature_edges = feature_edges;
+    return copy;
   };
   if (mesh.num_faces() <= kDecimateAboveBudget * max_faces) return keep_input();
 

@@ -95,8 +95,7 @@ double Session::target_edge_length() const {
   return std::sqrt(area / faces);
 }
 
-int Session::component_face_budget(int component) const {
-  const double edge_length = target_edge_length();
+int Session::component_face_budget(int component, double edge_length) const {
   double area = 0;
   const TriMesh& m = intake_->mesh;
   for (int f : intake_->components[component].faces) area += 0.5 * m.face_normal_unnormalized(f).norm();
@@ -105,13 +104,14 @@ int Session::component_face_budget(int component) const {
 
 bool Session::cached_components_fit(Job job) const {
   if (components_.empty()) return false;
+  const double edge_length = target_edge_length();
   for (size_t c = 0; c < components_.size(); ++c) {
     const ComponentState& state = components_[c];
     if (!state.full_mesh) continue;
     // Grid UVs belong to the input triangles. A new density reuses the working mesh (only
     // quantization and later stages run again) unless it needs a much finer one.
     if (job != Job::Remesh ||
-        component_face_budget(static_cast<int>(c)) > kMaxWorkingBudgetGrowth * state.working_face_budget)
+        component_face_budget(static_cast<int>(c), edge_length) > kMaxWorkingBudgetGrowth * state.working_face_budget)
       return false;
   }
   return true;
@@ -124,6 +124,7 @@ void Session::prepare_components(Job job, Progress& progress) {
   components_.clear();
   int unmatched = 0;
   const std::vector<char> features = map_input_edges(*intake_, options_.feature_edges, &unmatched);
+  const double edge_length = target_edge_length();
   components_.resize(intake_->components.size());
   int split = 0;
   for (size_t c = 0; c < components_.size(); ++c) {
@@ -137,7 +138,7 @@ void Session::prepare_components(Job job, Progress& progress) {
     }
     state.feature_edges = detect_feature_edges(state.mesh, caller, options_.sharp_angle_deg);
     if (job == Job::Remesh) {
-      state.working_face_budget = component_face_budget(static_cast<int>(c));
+      state.working_face_budget = component_face_budget(static_cast<int>(c), edge_length);
       WorkingMesh working = make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, progress);
       if (working.decimated) {
         for (int& v : working.vertex_of_input) v = state.vertex_map[v];

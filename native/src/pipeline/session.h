@@ -100,7 +100,7 @@ class Session {
   void run_intake_stage(Progress& progress);
   void prepare_components(Job job, Progress& progress);
   bool cached_components_fit(Job job) const;
-  int component_face_budget(int component) const;
+  int component_face_budget(int component, double edge_length) const;  // working-mesh faces
   void report_component_preparation();
   void run_remesh_stages(Job job, Progress& progress);
   void run_field_stages(Progress& progress);

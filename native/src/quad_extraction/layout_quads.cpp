@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <limits>
-#include <map>
 #include <numeric>
 #include <string>
 
@@ -375,28 +374,6 @@ Json layout_quads_stats_json(const LayoutQuadsStats& s) {
               {"merged_points", s.merged_points},
               {"walk_failures", s.walk_failures},
               {"seconds", s.seconds}};
-}
-
-std::vector<char> non_manifold_quads(const QuadMesh& quads) {
-  const int nq = quads.num_quads();
-  std::vector<char> bad(nq, 0);
-  std::map<std::pair<int, int>, std::vector<int>> uses;  // undirected edge -> quads (sign: direction)
-  for (int q = 0; q < nq; ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
-      if (a == b) {
-        bad[q] = 1;
-        continue;
-      }
-      uses[std::minmax(a, b)].push_back(a < b ? q + 1 : -(q + 1));
-    }
-  for (const auto& [edge, list] : uses) {
-    bool broken = list.size() > 2;
-    if (list.size() == 2) broken = (list[0] > 0) == (list[1] > 0);
-    if (broken)
-      for (int signed_q : list) bad[std::abs(signed_q) - 1] = 1;
-  }
-  return bad;
 }
 
 }  // namespace qgp

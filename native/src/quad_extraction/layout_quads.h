@@ -49,8 +49,4 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
 
 Json layout_quads_stats_json(const LayoutQuadsStats& stats);
 
-// Quads that make a mesh non-manifold: with a repeated corner, or with an edge that more than
-// two quads share or that two quads run in the same direction. #Q flags.
-std::vector<char> non_manifold_quads(const QuadMesh& quads);
-
 }  // namespace qgp

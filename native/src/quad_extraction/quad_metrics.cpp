@@ -9,27 +9,48 @@
 
 namespace qgp {
 
+namespace {
+
+// Uses of an undirected edge in each direction (forward = from the lower to the higher index).
+struct EdgeUses {
+  int forward = 0, backward = 0;
+  bool non_manifold() const { return forward + backward > 2; }
+  bool inconsistent() const { return forward > 1 || backward > 1; }
+};
+
+uint64_t edge_key(int a, int b) { return (uint64_t(std::min(a, b)) << 32) | uint32_t(std::max(a, b)); }
+
+std::unordered_map<uint64_t, EdgeUses> edge_uses(const QuadMesh& quads) {
+  std::unordered_map<uint64_t, EdgeUses> edges;
+  edges.reserve(4 * static_cast<size_t>(quads.num_quads()));
+  for (int q = 0; q < quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      EdgeUses& u = edges[edge_key(a, b)];
+      (a < b ? u.forward : u.backward)++;
+    }
+  return edges;
+}
+
+bool repeats_a_corner(const QuadMesh& quads, int q) {
+  for (int k = 0; k < 4; ++k)
+    for (int j = k + 1; j < 4; ++j)
+      if (quads.Q(q, k) == quads.Q(q, j)) return true;
+  return false;
+}
+
+}  // namespace
+
 QuadTopology quad_topology(const QuadMesh& quads) {
   QuadTopology t;
   const int nv = quads.num_vertices(), nq = quads.num_quads();
   t.vertices = nv;
   t.faces = nq;
-  // Undirected edge -> uses in each direction (forward = from the lower to the higher index).
-  struct Uses { int forward = 0, backward = 0; };
-  std::unordered_map<uint64_t, Uses> edges;
-  edges.reserve(4 * static_cast<size_t>(nq));
+  const std::unordered_map<uint64_t, EdgeUses> edges = edge_uses(quads);
   std::vector<char> used(nv, 0);
   for (int q = 0; q < nq; ++q) {
-    bool degenerate = false;
-    for (int k = 0; k < 4; ++k) {
-      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
-      used[a] = 1;
-      for (int j = k + 1; j < 4; ++j) degenerate |= a == quads.Q(q, j);
-      const uint64_t key = (uint64_t(std::min(a, b)) << 32) | uint32_t(std::max(a, b));
-      Uses& u = edges[key];
-      (a < b ? u.forward : u.backward)++;
-    }
-    t.degenerate_quads += degenerate;
+    for (int k = 0; k < 4; ++k) used[quads.Q(q, k)] = 1;
+    t.degenerate_quads += repeats_a_corner(quads, q);
   }
   t.edges = static_cast<int>(edges.size());
   t.valence.assign(nv, 0);
@@ -39,8 +60,8 @@ QuadTopology quad_topology(const QuadMesh& quads) {
     ++t.valence[a], ++t.valence[b];
     const int n = u.forward + u.backward;
     if (n == 1) ++t.boundary_edges, t.on_boundary[a] = t.on_boundary[b] = 1;
-    if (n > 2) ++t.non_manifold_edges;
-    if (u.forward > 1 || u.backward > 1) ++t.inconsistent_edges;
+    t.non_manifold_edges += u.non_manifold();
+    t.inconsistent_edges += u.inconsistent();
   }
   for (int v = 0; v < nv; ++v) {
     if (!used[v]) {
@@ -52,6 +73,19 @@ QuadTopology quad_topology(const QuadMesh& quads) {
   }
   t.euler_characteristic = t.vertices - t.edges + t.faces;
   return t;
+}
+
+std::vector<char> non_manifold_quads(const QuadMesh& quads) {
+  const std::unordered_map<uint64_t, EdgeUses> edges = edge_uses(quads);
+  std::vector<char> bad(quads.num_quads(), 0);
+  for (int q = 0; q < quads.num_quads(); ++q) {
+    bad[q] = repeats_a_corner(quads, q);
+    for (int k = 0; k < 4 && !bad[q]; ++k) {
+      const EdgeUses& u = edges.at(edge_key(quads.Q(q, k), quads.Q(q, (k + 1) % 4)));
+      bad[q] = u.non_manifold() || u.inconsistent();
+    }
+  }
+  return bad;
 }
 
 std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T, int count,

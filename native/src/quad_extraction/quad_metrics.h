@@ -32,6 +32,10 @@ struct QuadTopology {
 
 QuadTopology quad_topology(const QuadMesh& quads);
 
+// #Q flags: the quads behind quad_topology's defect counts (a repeated corner, or an edge shared by
+// more than two quads or run twice in one direction).
+std::vector<char> non_manifold_quads(const QuadMesh& quads);
+
 struct QuadMetricsOptions {
   bool hausdorff = true;          // sample the two-sided Hausdorff distance
   int hausdorff_samples = 100000; // random surface samples per direction (plus all vertices)

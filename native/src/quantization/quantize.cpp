@@ -253,7 +253,9 @@ class GreedyQuantizer {
       collect_changes(dnodes_, sign);
       for (const Change& c : changes_) strong.push_back(c.edge);
       bool feasible = true;
-      for (const Change& c : changes_) feasible = feasible && x_[c.edge] + c.delta >= std::min(min_length_[c.edge], x_[c.edge]);
+      // x >= 0, and >= min_length unless stage I left the edge below it (no generating vector).
+      for (const Change& c : changes_)
+        feasible = feasible && x_[c.edge] + c.delta >= std::min(min_length_[c.edge], x_[c.edge]);
       double approx = 0;
       if (!feasible || objective_change_sign(changes_, x_, ideal_, &approx) >= 0) {
         ++r.stage2_not_improving;
