@@ -382,7 +382,7 @@ TEST(QuadExtraction, CubeQuadsLieOnTheCube) {
 }
 
 // Folded cube quads (free vertices pushed across their neighbours) are unfolded; vertices on the
-// cube's sharp edges never move, the connectivity stays.
+// cube's sharp edges stay there (here nothing needs them to move), the connectivity stays.
 TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   const auto cube = scaled(test::make_grid_cube(4), 3);
   Progress progress;
@@ -430,6 +430,55 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   const QuadMesh copy = clean;
   EXPECT_EQ(untangle_flipped_quads(clean, cube.mesh, sharp, progress).moved_vertices, 0);
   EXPECT_EQ(clean.V, copy.V);
+}
+
+// A vertex on a sharp edge pushed past its neighbour along that edge (folding the quads of both
+// cube faces) slides back along the edge; it never leaves the edge, and the cube's corners stay.
+TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
+  const auto cube = scaled(test::make_grid_cube(4), 3);
+  Progress progress;
+  QuadMesh quads = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
+  const std::vector<char> sharp = detect_feature_edges(cube.mesh, {}, 40);
+  const TriangleBvh bvh(cube.mesh);
+  auto extreme_axes = [&](const QuadMesh& q, int v) {
+    std::vector<int> axes;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(q.V(v, a)) < 1e-9 || std::abs(q.V(v, a) - 4) < 1e-9) axes.push_back(a);
+    return axes;
+  };
+  // v and w: neighbours on the same cube edge, neither a corner; v goes two edge lengths past w,
+  // still on the edge.
+  int v = -1;
+  Vec3 past = Vec3::Zero();
+  for (int q = 0; q < quads.num_quads() && v < 0; ++q)
+    for (int k = 0; k < 4 && v < 0; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      if (extreme_axes(quads, a).size() != 2 || extreme_axes(quads, a) != extreme_axes(quads, b)) continue;
+      past = quads.V.row(b).transpose() + 2 * (quads.V.row(b) - quads.V.row(a)).transpose();
+      const std::vector<int> axes = extreme_axes(quads, a);
+      bool inside_edge = true;
+      for (int axis = 0; axis < 3; ++axis)
+        if (std::find(axes.begin(), axes.end(), axis) == axes.end())
+          inside_edge = inside_edge && past[axis] > 0.5 && past[axis] < 3.5;
+      if (inside_edge) v = a;
+    }
+  ASSERT_GE(v, 0);
+  const TriangleBvh::Hit hit = bvh.closest_point(past);
+  ASSERT_LT((hit.point - past).norm(), 1e-9);
+  quads.V.row(v) = hit.point.transpose();
+  quads.vertex_face[v] = hit.triangle;
+  const QuadMesh folded = quads;
+  const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
+  EXPECT_GE(stats.flipped_before, 1);
+  EXPECT_EQ(stats.flipped_after, 0);
+  EXPECT_EQ(compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress).flipped_quads, 0);
+  EXPECT_NE(quads.V.row(v), folded.V.row(v));
+  EXPECT_EQ(extreme_axes(quads, v), extreme_axes(folded, v));
+  for (int u = 0; u < quads.num_vertices(); ++u) {
+    if (extreme_axes(folded, u).size() == 3) EXPECT_EQ(quads.V.row(u), folded.V.row(u)) << u;
+    if (extreme_axes(folded, u).size() == 2) EXPECT_EQ(extreme_axes(quads, u), extreme_axes(folded, u)) << u;
+    EXPECT_LT(bvh.closest_point(quads.V.row(u).transpose()).squared_distance, 1e-18) << u;
+  }
 }
 
 QuadMesh quads_of(const std::vector<std::array<int, 4>>& faces, int num_vertices) {

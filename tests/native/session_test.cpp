@@ -341,5 +341,16 @@ TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
+// Runs whose quads used to fold against the surface (camelhead's thin ears, coarse limbs and heads)
+// before the untangle step maximized the quads' worst corner areas: the output invariants hold,
+// no quad flipped included.
+TEST(SessionMeshes, ThinAndCoarsePartsComeOutUnfolded) {
+  std::vector<std::string> failed = sweep({{"camelhead.off", -1}}, {500, 2000, 8000});
+  const std::vector<std::string> more =
+      sweep({{"armadillo.obj", -1}, {"fertility.off", -1}, {"mnf07HeadFem_rem_rem_p.obj", -1}}, {500});
+  failed.insert(failed.end(), more.begin(), more.end());
+  EXPECT_TRUE(failed.empty()) << joined(failed);
+}
+
 }  // namespace
 }  // namespace qgp

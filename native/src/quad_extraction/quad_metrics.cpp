@@ -118,20 +118,23 @@ double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target,
   return std::sqrt(worst);
 }
 
-bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
-  const Vec3 normal = (p[2] - p[0]).cross(p[3] - p[1]);
-  // Reference normal: sum of the surface normals at the closest points of five interior points of
-  // the bilinear quad (interior points, unlike corners on a sharp edge, have an unambiguous
-  // closest triangle when the quad lies on the surface).
-  Vec3 reference_normal = Vec3::Zero();
+Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
+  // Interior points of the bilinear quad (unlike corners on a sharp edge) have an unambiguous
+  // closest triangle when the quad lies on the surface.
+  Vec3 sum = Vec3::Zero();
   const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}};
   for (const auto& st : at) {
     const Vec3 x = (1 - st[0]) * (1 - st[1]) * p[0] + st[0] * (1 - st[1]) * p[1] + st[0] * st[1] * p[2] +
                    (1 - st[0]) * st[1] * p[3];
     const TriangleBvh::Hit hit = reference_bvh.closest_point(x);
-    if (hit.triangle >= 0) reference_normal += reference.face_normal_unnormalized(hit.triangle).normalized();
+    if (hit.triangle >= 0) sum += reference.face_normal_unnormalized(hit.triangle).normalized();
   }
-  return !(normal.dot(reference_normal) > 0);
+  return sum;
+}
+
+bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
+  const Vec3 normal = (p[2] - p[0]).cross(p[3] - p[1]);
+  return !(normal.dot(quad_reference_normal(p, reference, reference_bvh)) > 0);
 }
 
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,

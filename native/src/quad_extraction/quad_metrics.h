@@ -55,6 +55,10 @@ struct QuadMetrics {
   double hausdorff_mesh_to_quads = 0;
 };
 
+// Sum of the unit normals of `reference` at the closest points of five interior points of the
+// bilinear quad p[0..3] (not normalized; zero if the reference is empty).
+Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh);
+
 // Quad p[0..3] (counter-clockwise) is flipped: its normal (of the diagonals) points against the
 // summed normals of `reference` at the closest points of five interior points.
 bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh);

@@ -1,6 +1,9 @@
 #include "quad_extraction/untangle_quads.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -11,148 +14,475 @@ namespace qgp {
 
 namespace {
 
-// Quad vertices that must stay: on a feature or boundary edge or at a feature vertex of the surface.
-std::vector<char> pinned_to_features(const QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges) {
-  auto is_feature = [&](int e) { return surface.is_boundary_edge(e) || (!feature_edges.empty() && feature_edges[e]); };
-  std::vector<char> feature_vertex(surface.num_vertices(), 0);
-  for (int e = 0; e < surface.num_edges(); ++e)
-    if (is_feature(e)) {
-      const int h = surface.edge_halfedge[e];
-      feature_vertex[surface.from(h)] = feature_vertex[surface.to(h)] = 1;
-    }
-  std::vector<char> pinned(quads.num_vertices(), 0);
-  for (int v = 0; v < quads.num_vertices(); ++v) {
-    const int f = quads.vertex_face[v];
-    if (f < 0 || f >= surface.num_faces()) {
-      pinned[v] = 1;
-      continue;
-    }
-    const Vec3 p = quads.V.row(v).transpose();
-    for (int k = 0; k < 3 && !pinned[v]; ++k) {
-      const Vec3 a = surface.position(surface.F(f, k)), b = surface.position(surface.F(f, (k + 1) % 3));
-      const double tolerance = 1e-6 * (b - a).norm();
-      if (is_feature(surface.edge_of[3 * f + k]) && point_segment_distance(p, a, b) <= tolerance) pinned[v] = 1;
-      if (feature_vertex[surface.F(f, k)] && (p - a).norm() <= tolerance) pinned[v] = 1;
+// The feature and boundary edges of a surface as curves that quad vertices on them slide along.
+// Quad vertices at curve corners (surface vertices with other than two feature or boundary edges,
+// or where the curve turns by more than a degree) never move, and none slides past a corner, so the
+// quad edges along a curve keep its shape.
+class FeatureCurves {
+ public:
+  FeatureCurves(const TriMesh& surface, const std::vector<char>& feature_edges)
+      : surface_(surface), feature_edges_(feature_edges), edges_at_(surface.num_vertices()) {
+    for (int e = 0; e < surface.num_edges(); ++e)
+      if (is_curve(e)) {
+        const int h = surface.edge_halfedge[e];
+        edges_at_[surface.from(h)].push_back(e);
+        edges_at_[surface.to(h)].push_back(e);
+      }
+    corner_.assign(surface.num_vertices(), 0);
+    for (int u = 0; u < surface.num_vertices(); ++u) {
+      if (edges_at_[u].empty()) continue;
+      if (edges_at_[u].size() != 2) {
+        corner_[u] = 1;
+        continue;
+      }
+      Vec3 d[2];
+      for (int i = 0; i < 2; ++i) {
+        const int h = surface.edge_halfedge[edges_at_[u][i]];
+        d[i] = (surface.position(surface.from(h) == u ? surface.to(h) : surface.from(h)) - surface.position(u)).normalized();
+      }
+      corner_[u] = !(d[0].dot(d[1]) < -std::cos(M_PI / 180));
     }
   }
-  return pinned;
+
+  // Where a quad vertex at p in surface triangle f sits.
+  struct Place {
+    enum Kind { kFree, kOnCurve, kCorner } kind = kFree;
+    int edge = -1;   // kOnCurve: the surface edge ...
+    double s = 0;    // ... and the parameter along it, from(edge_halfedge) = 0 to to(edge_halfedge) = 1
+  };
+  Place locate(const Vec3& p, int f) const {
+    Place place;
+    if (f < 0 || f >= surface_.num_faces()) {
+      place.kind = Place::kCorner;
+      return place;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const int u = surface_.F(f, k);
+      const Vec3 a = surface_.position(u), b = surface_.position(surface_.F(f, (k + 1) % 3));
+      const double tolerance = 1e-6 * (b - a).norm();
+      if (edges_at_[u].empty() || (p - a).norm() > tolerance) continue;
+      if (corner_[u]) {
+        place.kind = Place::kCorner;
+        return place;
+      }
+      place = {Place::kOnCurve, edges_at_[u][0], surface_.from(surface_.edge_halfedge[edges_at_[u][0]]) == u ? 0.0 : 1.0};
+    }
+    if (place.kind != Place::kFree) return place;
+    for (int k = 0; k < 3; ++k) {
+      const int e = surface_.edge_of[3 * f + k];
+      const Vec3 a = surface_.position(surface_.F(f, k)), b = surface_.position(surface_.F(f, (k + 1) % 3));
+      if (!is_curve(e) || point_segment_distance(p, a, b) > 1e-6 * (b - a).norm()) continue;
+      const int h = surface_.edge_halfedge[e];
+      const Vec3 from = surface_.position(surface_.from(h)), along = surface_.edge_vector(h);
+      place = {Place::kOnCurve, e, std::clamp((p - from).dot(along) / along.squaredNorm(), 0.0, 1.0)};
+    }
+    return place;
+  }
+
+  Vec3 point(const Place& place) const {
+    const int h = surface_.edge_halfedge[place.edge];
+    return surface_.position(surface_.from(h)) + place.s * surface_.edge_vector(h);
+  }
+  // Unit direction of increasing s.
+  Vec3 direction(const Place& place) const { return surface_.edge_vector(surface_.edge_halfedge[place.edge]).normalized(); }
+  int face(const Place& place) const { return TriMesh::face(surface_.edge_halfedge[place.edge]); }
+
+  // The place `distance` away along the curve (towards increasing s if positive), stopping at corners.
+  Place walk(Place place, double distance) const {
+    int dir = distance >= 0 ? 1 : -1;
+    double left = std::abs(distance);
+    for (int guard = 0; guard < 100000; ++guard) {
+      const int h = surface_.edge_halfedge[place.edge];
+      const double length = surface_.edge_vector(h).norm();
+      const double room = (dir > 0 ? 1 - place.s : place.s) * length;
+      if (left <= room) {
+        if (length > 0) place.s = std::clamp(place.s + dir * left / length, 0.0, 1.0);
+        return place;
+      }
+      left -= room;
+      const int u = dir > 0 ? surface_.to(h) : surface_.from(h);
+      place.s = dir > 0 ? 1 : 0;
+      if (corner_[u]) return place;
+      place.edge = edges_at_[u][0] == place.edge ? edges_at_[u][1] : edges_at_[u][0];
+      const bool forward = surface_.from(surface_.edge_halfedge[place.edge]) == u;
+      dir = forward ? 1 : -1;
+      place.s = forward ? 0 : 1;
+    }
+    return place;
+  }
+
+ private:
+  bool is_curve(int e) const { return surface_.is_boundary_edge(e) || (!feature_edges_.empty() && feature_edges_[e]); }
+
+  const TriMesh& surface_;
+  const std::vector<char>& feature_edges_;
+  std::vector<std::vector<int>> edges_at_;  // per surface vertex: its feature and boundary edges
+  std::vector<char> corner_;                 // per surface vertex
+};
+
+// How far a free vertex may go from where it started, in its mean edge lengths: the short reach
+// first (it keeps the surface best), the longer ones only where quads stay flipped.
+constexpr double kReaches[] = {0.5, 1.0, 2.0};
+// Gauss-Seidel passes over the free vertices of a region per round.
+constexpr int kSweeps = 30;
+
+// The quads around one free vertex v, each as (v, a, b, c) counter-clockwise, with its reference
+// normal (unit) and 1 / (its mean edge length)^2, both taken at the start of the round.
+struct Star {
+  std::vector<std::array<int, 4>> quads;
+  std::vector<Vec3> normal;
+  std::vector<double> scale;
+};
+
+// Five figures per quad of the star, each linear in the position x of its vertex: the four corner
+// areas and half the cross product of the diagonals, along the quad's normal, scaled.
+void quality_terms(const QuadMesh& quads, const Star& star, const Vec3& x, std::vector<double>& terms) {
+  terms.clear();
+  for (size_t i = 0; i < star.quads.size(); ++i) {
+    Vec3 p[4];
+    p[0] = x;
+    for (int k = 1; k < 4; ++k) p[k] = quads.V.row(star.quads[i][k]).transpose();
+    const Vec3& n = star.normal[i];
+    for (int k = 0; k < 4; ++k)
+      terms.push_back((p[(k + 1) % 4] - p[k]).cross(p[(k + 3) % 4] - p[k]).dot(n) * star.scale[i]);
+    terms.push_back(0.5 * (p[2] - p[0]).cross(p[3] - p[1]).dot(n) * star.scale[i]);
+  }
 }
 
-}  // namespace
-
-UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges,
-                                     Progress& progress, int max_rings) {
-  Timer timer;
-  UntangleStats stats;
-  const int nv = quads.num_vertices(), nq = quads.num_quads();
-  if (static_cast<int>(quads.vertex_face.size()) != nv)
-    throw Error(ErrorCode::Internal, "untangle: the quads have no surface triangle per vertex");
-  if (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != surface.num_edges())
-    throw Error(ErrorCode::Internal, "untangle: the feature edges do not match the surface");
-  const TriangleBvh bvh(surface);
-  auto corners = [&](int q, Vec3 p[4]) {
-    for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
-  };
-  auto is_flipped = [&](int q) {
-    Vec3 p[4];
-    corners(q, p);
-    return quad_is_flipped(p, surface, bvh);
-  };
-  std::vector<char> flipped(nq, 0);
-  for (int q = 0; q < nq; ++q) {
-    if ((q & 1023) == 0) progress.check_cancel();
-    flipped[q] = is_flipped(q);
-    stats.flipped_before += flipped[q];
+// Fewer flipped quads (non-positive diagonal term), then a larger worst term, is better.
+struct StarKey {
+  int flipped = 0;
+  double worst = std::numeric_limits<double>::infinity();
+  bool better_than(const StarKey& o) const { return flipped < o.flipped || (flipped == o.flipped && worst > o.worst + 1e-12); }
+};
+StarKey star_key(const std::vector<double>& terms) {
+  StarKey key;
+  for (size_t i = 0; i < terms.size(); ++i) {
+    key.worst = std::min(key.worst, terms[i]);
+    if (i % 5 == 4 && !(terms[i] > 0)) ++key.flipped;
   }
-  stats.flipped_after = stats.flipped_before;
-  if (stats.flipped_before == 0) {
-    stats.seconds = timer.seconds();
-    return stats;
-  }
+  return key;
+}
 
-  // Vertex -> quads and edge neighbours.
-  std::vector<std::vector<int>> vertex_quads(nv), neighbours(nv);
-  for (int q = 0; q < nq; ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int v = quads.Q(q, k);
-      vertex_quads[v].push_back(q);
-      for (int w : {quads.Q(q, (k + 1) % 4), quads.Q(q, (k + 3) % 4)})
-        if (std::find(neighbours[v].begin(), neighbours[v].end(), w) == neighbours[v].end()) neighbours[v].push_back(w);
+// argmax over d in the regular octagon of apothem `radius` around `centre` of min_i (c[i] + g[i]·d).
+// The optimum of this 2D linear program lies at an octagon vertex, at a point of an octagon side
+// where two terms are equal, or where three terms are equal: every such point is tried.
+Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& g, const Vec2& centre, double radius) {
+  const size_t m = c.size();
+  Vec2 corner[8], side[8];
+  for (int k = 0; k < 8; ++k) {
+    side[k] = Vec2(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
+    corner[k] = centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
+  }
+  auto inside = [&](const Vec2& d) {
+    for (const Vec2& u : side)
+      if (u.dot(d - centre) > radius * (1 + 1e-9)) return false;
+    return true;
+  };
+  auto worst = [&](const Vec2& d) {
+    double w = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < m; ++i) w = std::min(w, c[i] + g[i].dot(d));
+    return w;
+  };
+  Vec2 best = Vec2::Zero();
+  double best_value = worst(best);
+  auto consider = [&](const Vec2& d) {
+    const double w = worst(d);
+    if (w > best_value) best_value = w, best = d;
+  };
+  for (int k = 0; k < 8; ++k) {
+    consider(corner[k]);
+    const Vec2 a = corner[(k + 7) % 8], b = corner[k];
+    for (size_t i = 0; i < m; ++i)
+      for (size_t j = i + 1; j < m; ++j) {
+        const Vec2 dg = g[i] - g[j];
+        const double slope = dg.dot(b - a);
+        if (std::abs(slope) < 1e-14) continue;
+        const double s = -(c[i] - c[j] + dg.dot(a)) / slope;
+        if (s >= 0 && s <= 1) consider(a + s * (b - a));
+      }
+  }
+  for (size_t i = 0; i < m; ++i)
+    for (size_t j = i + 1; j < m; ++j) {
+      const Vec2 r0 = g[i] - g[j];
+      for (size_t l = j + 1; l < m; ++l) {
+        const Vec2 r1 = g[i] - g[l];
+        const double det = r0.x() * r1.y() - r0.y() * r1.x();
+        if (std::abs(det) < 1e-14) continue;
+        const double b0 = c[j] - c[i], b1 = c[l] - c[i];
+        const Vec2 d((b0 * r1.y() - r0.y() * b1) / det, (r0.x() * b1 - b0 * r1.x()) / det);
+        if (inside(d)) consider(d);
+      }
     }
-  std::vector<char> fixed = pinned_to_features(quads, surface, feature_edges);
-  const QuadTopology topology = quad_topology(quads);
-  for (int v = 0; v < nv; ++v) fixed[v] = fixed[v] || topology.on_boundary[v] || vertex_quads[v].empty();
+  return best;
+}
 
-  std::vector<char> moved(nv, 0);
-  for (int rings = 0; rings <= max_rings && stats.flipped_after > 0;) {
-    progress.check_cancel();
-    ++stats.rounds;
-    // The vertices of the flipped quads and `rings` rings around them; the free ones move.
+// argmax over d in [-1, 1] of min_i (c[i] + g[i] d): an end or where two terms are equal.
+double maximize_worst_term_1d(const std::vector<double>& c, const std::vector<double>& g) {
+  const size_t m = c.size();
+  auto worst = [&](double d) {
+    double w = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < m; ++i) w = std::min(w, c[i] + g[i] * d);
+    return w;
+  };
+  double best = 0, best_value = worst(0);
+  auto consider = [&](double d) {
+    const double w = worst(d);
+    if (w > best_value) best_value = w, best = d;
+  };
+  consider(-1);
+  consider(1);
+  for (size_t i = 0; i < m; ++i)
+    for (size_t j = i + 1; j < m; ++j)
+      if (std::abs(g[i] - g[j]) > 1e-14) {
+        const double d = (c[j] - c[i]) / (g[i] - g[j]);
+        if (d > -1 && d < 1) consider(d);
+      }
+  return best;
+}
+
+// One untangle run over a quad mesh: its adjacency, which vertices may move, and how far.
+class Untangler {
+ public:
+  Untangler(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges, Progress& progress)
+      : quads_(quads), surface_(surface), bvh_(surface), curves_(surface, feature_edges), progress_(progress),
+        start_(quads.V) {
+    const int nv = quads.num_vertices(), nq = quads.num_quads();
+    flipped_.assign(nq, 0);
+    for (int q = 0; q < nq; ++q) {
+      if ((q & 1023) == 0) progress.check_cancel();
+      flipped_[q] = is_flipped(q);
+      flipped_count_ += flipped_[q];
+    }
+    if (flipped_count_ == 0) return;
+    vertex_quads_.resize(nv);
+    neighbours_.resize(nv);
+    for (int q = 0; q < nq; ++q)
+      for (int k = 0; k < 4; ++k) {
+        const int v = quads.Q(q, k);
+        vertex_quads_[v].push_back(q);
+        for (int w : {quads.Q(q, (k + 1) % 4), quads.Q(q, (k + 3) % 4)})
+          if (std::find(neighbours_[v].begin(), neighbours_[v].end(), w) == neighbours_[v].end())
+            neighbours_[v].push_back(w);
+      }
+    const QuadTopology topology = quad_topology(quads);
+    place_.resize(nv);
+    fixed_.assign(nv, 0);
+    mean_edge_.assign(nv, 0);
+    for (int v = 0; v < nv; ++v) {
+      place_[v] = curves_.locate(quads.V.row(v).transpose(), quads.vertex_face[v]);
+      // Corners stay; so do vertices of the quads' boundary that are not on the surface's.
+      fixed_[v] = place_[v].kind == FeatureCurves::Place::kCorner ||
+                  (topology.on_boundary[v] && place_[v].kind != FeatureCurves::Place::kOnCurve) ||
+                  vertex_quads_[v].empty();
+      for (int w : neighbours_[v]) mean_edge_[v] += (quads.V.row(w) - quads.V.row(v)).norm();
+      if (!neighbours_[v].empty()) mean_edge_[v] /= neighbours_[v].size();
+    }
+    quad_normal_.assign(nq, Vec3::Zero());
+    quad_scale_.assign(nq, 0);
+  }
+
+  int flipped_count() const { return flipped_count_; }
+  // Vertices away from where they started.
+  int moved_vertices() const {
+    int moved = 0;
+    for (int v = 0; v < quads_.num_vertices(); ++v) moved += (quads_.V.row(v) != start_.row(v));
+    return moved;
+  }
+
+  // One round within `reach` mean edge lengths of the start: the free vertices of the flipped quads
+  // and `rings` rings around them improve their stars in turn; kept only if fewer quads are flipped.
+  bool round(double reach, int rings) {
+    progress_.check_cancel();
+    const int nv = quads_.num_vertices(), nq = quads_.num_quads();
     std::vector<char> in_region(nv, 0);
     std::vector<int> frontier;
     for (int q = 0; q < nq; ++q)
-      if (flipped[q])
+      if (flipped_[q])
         for (int k = 0; k < 4; ++k)
-          if (!in_region[quads.Q(q, k)]) in_region[quads.Q(q, k)] = 1, frontier.push_back(quads.Q(q, k));
+          if (!in_region[quads_.Q(q, k)]) in_region[quads_.Q(q, k)] = 1, frontier.push_back(quads_.Q(q, k));
     for (int r = 0; r < rings; ++r) {
       std::vector<int> next;
       for (int v : frontier)
-        for (int w : neighbours[v])
+        for (int w : neighbours_[v])
           if (!in_region[w]) in_region[w] = 1, next.push_back(w);
       frontier.swap(next);
     }
     std::vector<int> movable, affected;
     std::vector<char> is_affected(nq, 0);
     for (int v = 0; v < nv; ++v)
-      if (in_region[v] && !fixed[v]) {
+      if (in_region[v] && !fixed_[v] && mean_edge_[v] > 0) {
         movable.push_back(v);
-        for (int q : vertex_quads[v])
+        for (int q : vertex_quads_[v])
           if (!is_affected[q]) is_affected[q] = 1, affected.push_back(q);
       }
     int before = 0;
-    for (int q : affected) before += flipped[q];
-    if (movable.empty() || before == 0) {
-      ++rings;
-      continue;
-    }
+    for (int q : affected) before += flipped_[q];
+    if (movable.empty() || before == 0) return false;
+
     std::vector<Vec3> old_position(movable.size());
     std::vector<int> old_face(movable.size());
+    std::vector<FeatureCurves::Place> old_place(movable.size());
     for (size_t i = 0; i < movable.size(); ++i) {
-      old_position[i] = quads.V.row(movable[i]).transpose();
-      old_face[i] = quads.vertex_face[movable[i]];
+      old_position[i] = quads_.V.row(movable[i]).transpose();
+      old_face[i] = quads_.vertex_face[movable[i]];
+      old_place[i] = place_[movable[i]];
     }
-    // A few Jacobi steps of the umbrella average, each projected onto the surface.
-    std::vector<Vec3> target(movable.size());
-    for (int step = 0; step < 5; ++step) {
-      for (size_t i = 0; i < movable.size(); ++i) {
-        Vec3 sum = Vec3::Zero();
-        for (int w : neighbours[movable[i]]) sum += quads.V.row(w).transpose();
-        target[i] = sum / static_cast<double>(neighbours[movable[i]].size());
-      }
-      for (size_t i = 0; i < movable.size(); ++i) {
-        const TriangleBvh::Hit hit = bvh.closest_point(target[i]);
-        if (hit.triangle < 0) continue;
-        quads.V.row(movable[i]) = hit.point.transpose();
-        quads.vertex_face[movable[i]] = hit.triangle;
-      }
+    for (int q : affected) {
+      Vec3 p[4];
+      corners(q, p);
+      const Vec3 reference = quad_reference_normal(p, surface_, bvh_);
+      quad_normal_[q] = reference.norm() > 0 ? reference.normalized() : Vec3::Zero();
+      double perimeter = 0;
+      for (int k = 0; k < 4; ++k) perimeter += (p[(k + 1) % 4] - p[k]).norm();
+      quad_scale_[q] = perimeter > 0 ? 16 / (perimeter * perimeter) : 0;
+    }
+    for (int sweep = 0; sweep < kSweeps; ++sweep) {
+      progress_.check_cancel();
+      bool any = false;
+      for (int v : movable) any = improve_vertex(v, reach * mean_edge_[v]) || any;
+      if (!any) break;
     }
     std::vector<char> now(affected.size());
     int after = 0;
     for (size_t i = 0; i < affected.size(); ++i) after += now[i] = is_flipped(affected[i]);
     if (after < before) {
-      for (size_t i = 0; i < affected.size(); ++i) flipped[affected[i]] = now[i];
-      for (int v : movable) moved[v] = 1;
-      stats.flipped_after -= before - after;
-      ++stats.accepted_rounds;
-    } else {
-      for (size_t i = 0; i < movable.size(); ++i) {
-        quads.V.row(movable[i]) = old_position[i].transpose();
-        quads.vertex_face[movable[i]] = old_face[i];
-      }
-      ++rings;
+      for (size_t i = 0; i < affected.size(); ++i) flipped_[affected[i]] = now[i];
+      flipped_count_ -= before - after;
+      return true;
     }
+    for (size_t i = 0; i < movable.size(); ++i) {
+      quads_.V.row(movable[i]) = old_position[i].transpose();
+      quads_.vertex_face[movable[i]] = old_face[i];
+      place_[movable[i]] = old_place[i];
+    }
+    return false;
   }
-  stats.moved_vertices = static_cast<int>(std::count(moved.begin(), moved.end(), 1));
+
+ private:
+  void corners(int q, Vec3 p[4]) const {
+    for (int k = 0; k < 4; ++k) p[k] = quads_.V.row(quads_.Q(q, k)).transpose();
+  }
+  bool is_flipped(int q) const {
+    Vec3 p[4];
+    corners(q, p);
+    return quad_is_flipped(p, surface_, bvh_);
+  }
+
+  Star star_of(int v) const {
+    Star star;
+    for (int q : vertex_quads_[v]) {
+      int k = 0;
+      while (quads_.Q(q, k) != v) ++k;
+      star.quads.push_back({v, quads_.Q(q, (k + 1) % 4), quads_.Q(q, (k + 2) % 4), quads_.Q(q, (k + 3) % 4)});
+      star.normal.push_back(quad_normal_[q]);
+      star.scale.push_back(quad_scale_[q]);
+    }
+    return star;
+  }
+
+  // Moves v, within `reach` of its start, to where the worst quality term of its quads is largest:
+  // in its tangent plane and back onto the surface, or along its feature or boundary curve; true if
+  // its star got better.
+  bool improve_vertex(int v, double reach) {
+    if (place_[v].kind == FeatureCurves::Place::kOnCurve) return slide_vertex(v, reach);
+    const Star star = star_of(v);
+    const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
+    const Vec3 n = surface_.face_normal_unnormalized(quads_.vertex_face[v]);
+    if (!(n.norm() > 0)) return false;
+    // Tangent axes of length `reach`: the linear program works in units of the reach.
+    const Vec3 t1 = n.cross(std::abs(n.x()) < 0.9 * n.norm() ? Vec3::UnitX() : Vec3::UnitY()).normalized();
+    const Vec3 t2 = n.normalized().cross(t1);
+    const Vec3 a1 = reach * t1, a2 = reach * t2;
+    quality_terms(quads_, star, x0, c_);
+    const StarKey now = star_key(c_);
+    g_.assign(c_.size(), Vec2::Zero());
+    quality_terms(quads_, star, x0 + a1, terms_);
+    for (size_t i = 0; i < c_.size(); ++i) g_[i].x() = terms_[i] - c_[i];
+    quality_terms(quads_, star, x0 + a2, terms_);
+    for (size_t i = 0; i < c_.size(); ++i) g_[i].y() = terms_[i] - c_[i];
+    const Vec2 centre((origin - x0).dot(t1) / reach, (origin - x0).dot(t2) / reach);
+    const Vec2 d = maximize_worst_term(c_, g_, centre, std::max(1.0, centre.norm()));
+    if (d.isZero()) return false;
+    const double allowed = std::max(reach, (x0 - origin).norm());
+    for (double step = 1; step > 0.1; step *= 0.5) {
+      const TriangleBvh::Hit hit = bvh_.closest_point(x0 + step * (d.x() * a1 + d.y() * a2));
+      if (hit.triangle < 0 || (hit.point - origin).norm() > allowed) continue;
+      quality_terms(quads_, star, hit.point, terms_);
+      if (!star_key(terms_).better_than(now)) continue;
+      quads_.V.row(v) = hit.point.transpose();
+      quads_.vertex_face[v] = hit.triangle;
+      return true;
+    }
+    return false;
+  }
+
+  bool slide_vertex(int v, double reach) {
+    const Star star = star_of(v);
+    const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
+    quality_terms(quads_, star, x0, c_);
+    const StarKey now = star_key(c_);
+    quality_terms(quads_, star, x0 + reach * curves_.direction(place_[v]), terms_);
+    std::vector<double> g(c_.size());
+    for (size_t i = 0; i < c_.size(); ++i) g[i] = terms_[i] - c_[i];
+    const double d = maximize_worst_term_1d(c_, g);
+    if (d == 0) return false;
+    const double allowed = std::max(reach, (x0 - origin).norm());
+    for (double step = 1; step > 0.1; step *= 0.5) {
+      const FeatureCurves::Place place = curves_.walk(place_[v], step * d * reach);
+      const Vec3 x = curves_.point(place);
+      if ((x - origin).norm() > allowed) continue;
+      quality_terms(quads_, star, x, terms_);
+      if (!star_key(terms_).better_than(now)) continue;
+      quads_.V.row(v) = x.transpose();
+      quads_.vertex_face[v] = curves_.face(place);
+      place_[v] = place;
+      return true;
+    }
+    return false;
+  }
+
+  QuadMesh& quads_;
+  const TriMesh& surface_;
+  const TriangleBvh bvh_;
+  const FeatureCurves curves_;
+  Progress& progress_;
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> start_;
+  std::vector<char> flipped_;
+  int flipped_count_ = 0;
+  std::vector<std::vector<int>> vertex_quads_, neighbours_;
+  std::vector<FeatureCurves::Place> place_;  // per quad vertex: free, on a curve, or at a corner
+  std::vector<char> fixed_;
+  std::vector<double> mean_edge_;
+  std::vector<Vec3> quad_normal_;   // per quad, at the start of the current round
+  std::vector<double> quad_scale_;
+  std::vector<double> c_, terms_;   // scratch
+  std::vector<Vec2> g_;
+};
+
+}  // namespace
+
+UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges,
+                                     Progress& progress, int max_rings) {
+  Timer timer;
+  if (static_cast<int>(quads.vertex_face.size()) != quads.num_vertices())
+    throw Error(ErrorCode::Internal, "untangle: the quads have no surface triangle per vertex");
+  if (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != surface.num_edges())
+    throw Error(ErrorCode::Internal, "untangle: the feature edges do not match the surface");
+  Untangler untangler(quads, surface, feature_edges, progress);
+  UntangleStats stats;
+  stats.flipped_before = untangler.flipped_count();
+  // A round that helped is repeated on what is left; one that did not widens the region.
+  for (double reach : kReaches)
+    for (int rings = 0; rings <= max_rings && untangler.flipped_count() > 0;) {
+      ++stats.rounds;
+      if (untangler.round(reach, rings))
+        ++stats.accepted_rounds;
+      else
+        ++rings;
+    }
+  stats.flipped_after = untangler.flipped_count();
+  stats.moved_vertices = untangler.moved_vertices();
   stats.seconds = timer.seconds();
   return stats;
 }

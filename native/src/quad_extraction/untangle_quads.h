@@ -18,9 +18,11 @@ struct UntangleStats {
 };
 
 // Free vertices (not on the quad mesh's boundary, not on a feature or boundary edge or feature
-// vertex of `surface`) around flipped quads move to the average of their edge neighbours,
-// projected onto `surface`, a few times; the move is kept only where it lowers the number of
-// flipped quads it touches, and the region widens (up to max_rings rings) while it does not.
+// vertex of `surface`) of flipped quads and up to max_rings rings around them move one at a time:
+// each goes, in its tangent plane and back onto `surface`, to where the worst of its quads' corner
+// areas and diagonal cross products (along the surface normal, scaled) is largest, staying within
+// 0.5 of its mean edge length of where it started (then 1 and 2 where quads stay flipped). A round
+// is kept only if fewer quads are flipped.
 // quads.vertex_face (#V, triangles of `surface`) is required and kept up to date.
 // feature_edges: #E of `surface` (may be empty).
 UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges,
