@@ -20,6 +20,8 @@
 #include "quad_extraction/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
 #include "quad_extraction/untangle_quads.h"
+#include "igm/integer_grid_map.h"
+#include "igm/untangle_map.h"
 #include "cross_field/cross_field.h"
 #include "test_support.h"
 
@@ -479,6 +481,75 @@ TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
     if (extreme_axes(folded, u).size() == 2) EXPECT_EQ(extreme_axes(quads, u), extreme_axes(folded, u)) << u;
     EXPECT_LT(bvh.closest_point(quads.V.row(u).transpose()).squared_distance, 1e-18) << u;
   }
+}
+
+// An integer-grid map with free vertices (no cut, boundary or feature edge) pushed past a
+// neighbour: the untangle moves only free vertices, unfolds every triangle, keeps the transitions,
+// the singular corners, every vertex's angle sum and the parametric area exactly, and the map gives
+// its quads again.
+TEST(UntangleMap, FoldedFreeVerticesAreUnfoldedAndEverythingElseKept) {
+  const auto cube = scaled(test::make_grid_cube(4), 3);
+  const TriMesh& mesh = cube.mesh;
+  ExactParametrization igm = to_igm(mesh, cube.param);
+  // Angle sum of every vertex in quarter turns (corner angles do not depend on the chart).
+  auto quarter_turns = [&](const ExactParametrization& map) {
+    std::vector<double> sum(mesh.num_vertices(), 0);
+    for (int c = 0; c < 3 * mesh.num_faces(); ++c) {
+      const int f = c / 3, k = c % 3;
+      const IVec2 &p = map.uv[c], &a = map.uv[3 * f + (k + 1) % 3], &b = map.uv[3 * f + (k + 2) % 3];
+      const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
+      sum[mesh.F(f, k)] += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+    }
+    std::vector<long> turns(sum.size());
+    for (size_t v = 0; v < sum.size(); ++v) turns[v] = std::lround(sum[v] / (M_PI / 2));
+    return turns;
+  };
+  const std::vector<long> cones = quarter_turns(igm);
+  bool integral = false;
+  const int64_t area = exact_parametric_area(igm, &integral);
+  std::vector<char> free(mesh.num_vertices(), 1);
+  for (int h = 0; h < mesh.num_halfedges(); ++h)
+    if (igm.is_cut[mesh.edge_of[h]] || mesh.opposite[h] < 0) free[mesh.from(h)] = free[mesh.to(h)] = 0;
+  // Fold a few free vertices that share no triangle.
+  std::vector<char> touched(mesh.num_vertices(), 0);
+  int folded = 0;
+  for (int f = 0; f < mesh.num_faces() && folded < 4; ++f) {
+    const int v = mesh.F(f, 0), w = mesh.F(f, 1);
+    if (!free[v] || touched[v]) continue;
+    bool near = false;
+    for (int g = 0; g < mesh.num_faces(); ++g)
+      for (int k = 0; k < 3; ++k)
+        if (mesh.F(g, k) == v)
+          for (int j = 0; j < 3; ++j) near = near || touched[mesh.F(g, j)];
+    if (near) continue;
+    const IVec2 p = igm.uv[3 * f], q = igm.uv[3 * f + 1];
+    const IVec2 past{q[0] + (q[0] - p[0]) / 2, q[1] + (q[1] - p[1]) / 2};
+    for (int c = 0; c < 3 * mesh.num_faces(); ++c)
+      if (mesh.F(c / 3, c % 3) == v) igm.uv[c] = past;
+    touched[v] = touched[w] = 1;
+    ++folded;
+  }
+  ASSERT_GE(folded, 3);
+  const ExactParametrization before = igm;
+  int flipped = 0, degenerate = 0;
+  count_exact_irregular(igm, &flipped, &degenerate);
+  ASSERT_GT(flipped, 0);
+  Progress progress;
+  const MapUntangleStats stats = untangle_map(mesh, {}, igm, progress);
+  EXPECT_EQ(stats.flipped_before, flipped);
+  EXPECT_EQ(stats.flipped_after, 0);
+  EXPECT_EQ(stats.degenerate_after, 0);
+  count_exact_irregular(igm, &flipped, &degenerate);
+  EXPECT_EQ(flipped + degenerate, 0);
+  EXPECT_EQ(exact_parametric_area(igm, &integral), area);
+  EXPECT_TRUE(integral);
+  EXPECT_EQ(igm.rotation, before.rotation);
+  EXPECT_EQ(igm.translation, before.translation);
+  EXPECT_EQ(igm.is_cut, before.is_cut);
+  for (int c = 0; c < 3 * mesh.num_faces(); ++c)
+    if (!free[mesh.F(c / 3, c % 3)]) EXPECT_EQ(igm.uv[c], before.uv[c]) << c;
+  EXPECT_EQ(quarter_turns(igm), cones);  // no cone appeared or moved
+  extract_and_check("untangled cube", mesh, igm, 6 * 4 * 4 * 3 * 3);
 }
 
 QuadMesh quads_of(const std::vector<std::array<int, 4>>& faces, int num_vertices) {

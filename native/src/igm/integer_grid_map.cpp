@@ -630,7 +630,10 @@ Json igm_report(const IgmStats& s) {
               {"ipopt_solves", s.ipopt_solves},
               {"ipopt_iterations", s.ipopt_iterations},
               {"seconds_solve", s.seconds_solve},
-              {"seconds_sanitize", s.seconds_sanitize}};
+              {"seconds_sanitize", s.seconds_sanitize},
+              {"flipped_before_untangle", s.flipped_before_untangle},
+              {"degenerate_before_untangle", s.degenerate_before_untangle},
+              {"untangled_vertices", s.untangled_vertices}};
 }
 
 }  // namespace qgp

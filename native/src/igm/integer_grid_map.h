@@ -63,6 +63,8 @@ struct IgmOptions {
 struct IgmStats {
   int flipped_triangles = 0;        // in the exact result (exact sign)
   int degenerate_triangles = 0;     // in the exact result
+  int flipped_before_untangle = 0, degenerate_before_untangle = 0;  // set by the caller's untangle
+  int untangled_vertices = 0;       // (untangle_map) of the solve's exact result
   double max_integer_residual = 0;  // before snapping: largest distance of a singular vertex /
                                     // transition translation / feature isoline from an integer
   double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/sanitize_isolines.h"
 #include "core/timer.h"
+#include "igm/untangle_map.h"
 #include "intake/working_mesh.h"
 #include "pipeline/split_faces.h"
 #include "quad_extraction/quad_metrics.h"
@@ -462,6 +463,16 @@ void Session::run_igm_stage(Job job, Progress& progress) {
                                                     options, progress);
       state.igm_stats = map.stats;
       state.igm = std::move(map.param);
+      IgmStats& s = state.igm_stats;
+      if (s.flipped_triangles + s.degenerate_triangles > 0) {
+        const MapUntangleStats u = untangle_map(state.mesh, state.field->feature_edge, *state.igm, progress);
+        s.untangled_vertices = u.moved_vertices;
+        s.flipped_before_untangle = u.flipped_before;
+        s.degenerate_before_untangle = u.degenerate_before;
+        s.flipped_triangles = u.flipped_after;
+        s.degenerate_triangles = u.degenerate_after;
+        s.seconds += u.seconds;
+      }
     }
     const IgmStats& s = state.igm_stats;
     flipped += s.flipped_triangles;
@@ -501,8 +512,21 @@ void Session::run_quad_stage(Progress& progress) {
   for_each_component("quad_extraction", progress, [&](size_t c, ComponentState& state) {
     if (!state.quads) {
       const int euler = intake_->components[c].euler_characteristic;
-      // The integer-grid map's quads when the map is valid; otherwise (or if they do not form a
-      // valid mesh) the quads of the quantized T-mesh layout.
+      // Unfolds quads (on the working mesh, then, projected back, on the input surface).
+      auto untangle = [&](QuadMesh& quads) {
+        UntangleStats stats = untangle_flipped_quads(quads, state.mesh, state.field->feature_edge, progress);
+        if (state.full_mesh) {
+          project_to_surface(quads, *state.full_mesh, progress);
+          quads.quad_face.resize(quads.num_quads());
+          for (int q = 0; q < quads.num_quads(); ++q) quads.quad_face[q] = quads.vertex_face[quads.Q(q, 0)];
+          const UntangleStats projected = untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
+          stats.flipped_after = projected.flipped_after;
+          stats.moved_vertices += projected.moved_vertices;
+          stats.seconds += projected.seconds;
+        }
+        return stats;
+      };
+      // The integer-grid map's quads when the map is valid and they form a valid mesh.
       std::string why_not_igm;
       if (state.igm_stats.flipped_triangles + state.igm_stats.degenerate_triangles > 0) {
         why_not_igm = std::to_string(state.igm_stats.flipped_triangles) + " flipped and " +
@@ -512,6 +536,7 @@ void Session::run_quad_stage(Progress& progress) {
           QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
           why_not_igm = quad_mesh_defects(quad_topology(extraction.quads), euler);
           if (why_not_igm.empty()) {
+            state.untangle_stats = untangle(extraction.quads);
             state.quads = std::move(extraction);
             state.quads_path = "integer-grid map";
           }
@@ -520,40 +545,37 @@ void Session::run_quad_stage(Progress& progress) {
           why_not_igm = e.what();
         }
       }
-      if (!state.quads) {
+      // Otherwise, or if some of them stay flipped, the quads of the quantized T-mesh layout (kept
+      // if they are valid and fewer stay flipped).
+      if (!state.quads || state.untangle_stats.flipped_after > 0) {
         LayoutQuads layout =
             extract_layout_quads(state.mesh, *state.exact_seamless, *state.tmesh, state.quantization->x, progress);
         // Never hand out a broken mesh.
         const QuadTopology topology = quad_topology(layout.quads);
         const std::string defects = quad_mesh_defects(topology, euler);
-        if (!defects.empty()) {
+        if (!defects.empty() && !state.quads) {
           // A manifold, oriented result of another topology: a hole or handle collapsed.
           const bool collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;
           throw Error(ErrorCode::StageFailed,
                       "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written" +
                           (collapsed ? ". A hole or handle of this part is narrower than one quad: try more quads" : ""));
         }
-        QuadExtraction extraction;
-        extraction.quads = std::move(layout.quads);
-        extraction.stats.expected_quads = layout.stats.quads;
-        extraction.stats.seconds = layout.stats.seconds;
-        for (char s : extraction.quads.vertex_singular) extraction.stats.singular_vertices += s;
-        state.quads = std::move(extraction);
-        state.quads_path = "T-mesh layout (" + why_not_igm + ")";
-        state.layout_stats = layout.stats;
-      }
-      state.untangle_stats = untangle_flipped_quads(state.quads->quads, state.mesh, state.field->feature_edge, progress);
-      if (state.full_mesh) {
-        // Back onto the input surface, then unfold what the projection folded.
-        QuadMesh& quads = state.quads->quads;
-        project_to_surface(quads, *state.full_mesh, progress);
-        quads.quad_face.resize(quads.num_quads());
-        for (int q = 0; q < quads.num_quads(); ++q) quads.quad_face[q] = quads.vertex_face[quads.Q(q, 0)];
-        const UntangleStats projected =
-            untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
-        state.untangle_stats.flipped_after = projected.flipped_after;
-        state.untangle_stats.moved_vertices += projected.moved_vertices;
-        state.untangle_stats.seconds += projected.seconds;
+        if (defects.empty()) {
+          QuadExtraction extraction;
+          extraction.quads = std::move(layout.quads);
+          extraction.stats.expected_quads = layout.stats.quads;
+          extraction.stats.seconds = layout.stats.seconds;
+          for (char s : extraction.quads.vertex_singular) extraction.stats.singular_vertices += s;
+          const UntangleStats untangled = untangle(extraction.quads);
+          if (!state.quads || untangled.flipped_after < state.untangle_stats.flipped_after) {
+            if (state.quads)
+              why_not_igm = std::to_string(state.untangle_stats.flipped_after) + " of the integer-grid map's quads stay flipped";
+            state.quads = std::move(extraction);
+            state.quads_path = "T-mesh layout (" + why_not_igm + ")";
+            state.layout_stats = layout.stats;
+            state.untangle_stats = untangled;
+          }
+        }
       }
     }
     Json stats = quad_extraction_stats_json(state.quads->stats);

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/max_min_lp.h"
 #include "core/timer.h"
 #include "quad_extraction/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
@@ -162,83 +163,6 @@ StarKey star_key(const std::vector<double>& terms) {
     if (i % 5 == 4 && !(terms[i] > 0)) ++key.flipped;
   }
   return key;
-}
-
-// argmax over d in the regular octagon of apothem `radius` around `centre` of min_i (c[i] + g[i]·d).
-// The optimum of this 2D linear program lies at an octagon vertex, at a point of an octagon side
-// where two terms are equal, or where three terms are equal: every such point is tried.
-Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& g, const Vec2& centre, double radius) {
-  const size_t m = c.size();
-  Vec2 corner[8], side[8];
-  for (int k = 0; k < 8; ++k) {
-    side[k] = Vec2(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
-    corner[k] = centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
-  }
-  auto inside = [&](const Vec2& d) {
-    for (const Vec2& u : side)
-      if (u.dot(d - centre) > radius * (1 + 1e-9)) return false;
-    return true;
-  };
-  auto worst = [&](const Vec2& d) {
-    double w = std::numeric_limits<double>::infinity();
-    for (size_t i = 0; i < m; ++i) w = std::min(w, c[i] + g[i].dot(d));
-    return w;
-  };
-  Vec2 best = Vec2::Zero();
-  double best_value = worst(best);
-  auto consider = [&](const Vec2& d) {
-    const double w = worst(d);
-    if (w > best_value) best_value = w, best = d;
-  };
-  for (int k = 0; k < 8; ++k) {
-    consider(corner[k]);
-    const Vec2 a = corner[(k + 7) % 8], b = corner[k];
-    for (size_t i = 0; i < m; ++i)
-      for (size_t j = i + 1; j < m; ++j) {
-        const Vec2 dg = g[i] - g[j];
-        const double slope = dg.dot(b - a);
-        if (std::abs(slope) < 1e-14) continue;
-        const double s = -(c[i] - c[j] + dg.dot(a)) / slope;
-        if (s >= 0 && s <= 1) consider(a + s * (b - a));
-      }
-  }
-  for (size_t i = 0; i < m; ++i)
-    for (size_t j = i + 1; j < m; ++j) {
-      const Vec2 r0 = g[i] - g[j];
-      for (size_t l = j + 1; l < m; ++l) {
-        const Vec2 r1 = g[i] - g[l];
-        const double det = r0.x() * r1.y() - r0.y() * r1.x();
-        if (std::abs(det) < 1e-14) continue;
-        const double b0 = c[j] - c[i], b1 = c[l] - c[i];
-        const Vec2 d((b0 * r1.y() - r0.y() * b1) / det, (r0.x() * b1 - b0 * r1.x()) / det);
-        if (inside(d)) consider(d);
-      }
-    }
-  return best;
-}
-
-// argmax over d in [-1, 1] of min_i (c[i] + g[i] d): an end or where two terms are equal.
-double maximize_worst_term_1d(const std::vector<double>& c, const std::vector<double>& g) {
-  const size_t m = c.size();
-  auto worst = [&](double d) {
-    double w = std::numeric_limits<double>::infinity();
-    for (size_t i = 0; i < m; ++i) w = std::min(w, c[i] + g[i] * d);
-    return w;
-  };
-  double best = 0, best_value = worst(0);
-  auto consider = [&](double d) {
-    const double w = worst(d);
-    if (w > best_value) best_value = w, best = d;
-  };
-  consider(-1);
-  consider(1);
-  for (size_t i = 0; i < m; ++i)
-    for (size_t j = i + 1; j < m; ++j)
-      if (std::abs(g[i] - g[j]) > 1e-14) {
-        const double d = (c[j] - c[i]) / (g[i] - g[j]);
-        if (d > -1 && d < 1) consider(d);
-      }
-  return best;
 }
 
 // One untangle run over a quad mesh: its adjacency, which vertices may move, and how far.
