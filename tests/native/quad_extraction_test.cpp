@@ -383,14 +383,25 @@ TEST(QuadExtraction, CubeQuadsLieOnTheCube) {
   EXPECT_EQ(covered, 12 * 12);
 }
 
+// The untangle tests' input: the quads of a 4 x 4 x 4 cube (3 quads per grid unit), its sharp edges
+// at 40 degrees and a closest-point tree.
+struct CubeQuads {
+  SyntheticParametrized cube = scaled(test::make_grid_cube(4), 3);
+  Progress progress;
+  QuadMesh quads = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
+  std::vector<char> sharp = detect_feature_edges(cube.mesh, {}, 40);
+  TriangleBvh bvh{cube.mesh};
+};
+
 // Folded cube quads (free vertices pushed across their neighbours) are unfolded; vertices on the
 // cube's sharp edges stay there (here nothing needs them to move), the connectivity stays.
 TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
-  const auto cube = scaled(test::make_grid_cube(4), 3);
-  Progress progress;
-  QuadMesh quads = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
-  const std::vector<char> sharp = detect_feature_edges(cube.mesh, {}, 40);
-  const TriangleBvh bvh(cube.mesh);
+  CubeQuads input;
+  const auto& cube = input.cube;
+  Progress& progress = input.progress;
+  QuadMesh& quads = input.quads;
+  const std::vector<char>& sharp = input.sharp;
+  const TriangleBvh& bvh = input.bvh;
   auto on_cube_edge = [&](int v) {
     int extreme = 0;
     for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
@@ -437,11 +448,12 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
 // A vertex on a sharp edge pushed past its neighbour along that edge (folding the quads of both
 // cube faces) slides back along the edge; it never leaves the edge, and the cube's corners stay.
 TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
-  const auto cube = scaled(test::make_grid_cube(4), 3);
-  Progress progress;
-  QuadMesh quads = extract_quads(cube.mesh, to_igm(cube.mesh, cube.param), QuadExtractionOptions{}, progress).quads;
-  const std::vector<char> sharp = detect_feature_edges(cube.mesh, {}, 40);
-  const TriangleBvh bvh(cube.mesh);
+  CubeQuads input;
+  const auto& cube = input.cube;
+  Progress& progress = input.progress;
+  QuadMesh& quads = input.quads;
+  const std::vector<char>& sharp = input.sharp;
+  const TriangleBvh& bvh = input.bvh;
   auto extreme_axes = [&](const QuadMesh& q, int v) {
     std::vector<int> axes;
     for (int a = 0; a < 3; ++a)

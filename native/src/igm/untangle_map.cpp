@@ -34,13 +34,18 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
     throw Error(ErrorCode::Internal, "map untangle: the map does not match the mesh");
   if (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges())
     throw Error(ErrorCode::Internal, "map untangle: the feature edges do not match the mesh");
+  // Marks the flipped and degenerate triangles of the current map and counts them.
   std::vector<char> bad(nf, 0);
-  for (int f = 0; f < nf; ++f) {
-    const int s = orient2d_exact(param.uv[3 * f], param.uv[3 * f + 1], param.uv[3 * f + 2]);
-    bad[f] = s <= 0;
-    stats.flipped_before += s < 0;
-    stats.degenerate_before += s == 0;
-  }
+  auto count_bad = [&](int* flipped, int* degenerate) {
+    *flipped = *degenerate = 0;
+    for (int f = 0; f < nf; ++f) {
+      const int s = orient2d_exact(param.uv[3 * f], param.uv[3 * f + 1], param.uv[3 * f + 2]);
+      bad[f] = s <= 0;
+      *flipped += s < 0;
+      *degenerate += s == 0;
+    }
+  };
+  count_bad(&stats.flipped_before, &stats.degenerate_before);
   stats.flipped_after = stats.flipped_before;
   stats.degenerate_after = stats.degenerate_before;
   if (stats.flipped_before + stats.degenerate_before == 0) {
@@ -155,6 +160,8 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
     return false;
   };
 
+  // Moves are never undone: the counts after the last round are the result's.
+  int fewest = stats.flipped_before + stats.degenerate_before;
   for (int rings = 0; rings <= max_rings && stats.flipped_after + stats.degenerate_after > 0;) {
     progress.check_cancel();
     std::vector<char> in_region(nv, 0);
@@ -177,25 +184,11 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
       for (int v : movable) any = improve(v) || any;
       if (!any) break;
     }
-    int flipped = 0, degenerate = 0;
-    for (int f = 0; f < nf; ++f) {
-      const int s = orient2d_exact(param.uv[3 * f], param.uv[3 * f + 1], param.uv[3 * f + 2]);
-      bad[f] = s <= 0;
-      flipped += s < 0;
-      degenerate += s == 0;
-    }
-    if (flipped + degenerate < stats.flipped_after + stats.degenerate_after) {
-      stats.flipped_after = flipped;
-      stats.degenerate_after = degenerate;
-    } else {
+    count_bad(&stats.flipped_after, &stats.degenerate_after);
+    if (stats.flipped_after + stats.degenerate_after < fewest)
+      fewest = stats.flipped_after + stats.degenerate_after;
+    else
       ++rings;
-    }
-  }
-  stats.flipped_after = stats.degenerate_after = 0;
-  for (int f = 0; f < nf; ++f) {
-    const int s = orient2d_exact(param.uv[3 * f], param.uv[3 * f + 1], param.uv[3 * f + 2]);
-    stats.flipped_after += s < 0;
-    stats.degenerate_after += s == 0;
   }
   stats.moved_vertices = static_cast<int>(std::count(moved.begin(), moved.end(), 1));
   stats.seconds = timer.seconds();
