@@ -397,11 +397,7 @@ struct CubeQuads {
 // cube's sharp edges stay there (here nothing needs them to move), the connectivity stays.
 TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   CubeQuads input;
-  const auto& cube = input.cube;
-  Progress& progress = input.progress;
-  QuadMesh& quads = input.quads;
-  const std::vector<char>& sharp = input.sharp;
-  const TriangleBvh& bvh = input.bvh;
+  auto& [cube, progress, quads, sharp, bvh] = input;
   auto on_cube_edge = [&](int v) {
     int extreme = 0;
     for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
@@ -449,11 +445,7 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
 // cube faces) slides back along the edge; it never leaves the edge, and the cube's corners stay.
 TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
   CubeQuads input;
-  const auto& cube = input.cube;
-  Progress& progress = input.progress;
-  QuadMesh& quads = input.quads;
-  const std::vector<char>& sharp = input.sharp;
-  const TriangleBvh& bvh = input.bvh;
+  auto& [cube, progress, quads, sharp, bvh] = input;
   auto extreme_axes = [&](const QuadMesh& q, int v) {
     std::vector<int> axes;
     for (int a = 0; a < 3; ++a)
