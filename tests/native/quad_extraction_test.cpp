@@ -4,6 +4,7 @@
 // metrics and the projection onto a finer surface.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -487,11 +488,26 @@ TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
   }
 }
 
-// An integer-grid map with free vertices (no cut, boundary or feature edge) pushed past a
-// neighbour: the untangle moves only free vertices, unfolds every triangle, keeps the transitions,
-// the singular corners, every vertex's angle sum and the parametric area exactly, and the map gives
-// its quads again.
-TEST(UntangleMap, FoldedFreeVerticesAreUnfoldedAndEverythingElseKept) {
+// Moves vertex v of an exact map by delta, given in the chart of its outgoing halfedge h0, in every
+// chart it appears in (rotated across each transition); v must be interior.
+void move_exact_vertex(const TriMesh& mesh, ExactParametrization& map, int h0, IVec2 delta) {
+  std::vector<int> fan = outgoing_halfedges(mesh, mesh.from(h0));
+  std::rotate(fan.begin(), std::find(fan.begin(), fan.end(), h0), fan.end());
+  for (int h : fan) {
+    map.uv[h] = {map.uv[h][0] + delta[0], map.uv[h][1] + delta[1]};
+    delta = rotate_quarter(delta, map.rotation[TriMesh::prev(h)]);
+  }
+}
+
+// An exact cube map with vertices pushed 1.5 edges towards a neighbour, consistently in every
+// chart: vertices off the cut, vertices on the cut (the cube's edges) and, where the cube's edges
+// are isolines, vertices pushed along them. The untangle unfolds every triangle and keeps the
+// transitions exact, the singular corners in place, the isolines, every vertex's angle sum and the
+// parametric area, and the map gives its quads again.
+class UntangleMapFolds : public ::testing::TestWithParam<bool> {};
+
+TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
+  const bool cube_edges_are_isolines = GetParam();
   const auto cube = scaled(test::make_grid_cube(4), 3);
   const TriMesh& mesh = cube.mesh;
   ExactParametrization igm = to_igm(mesh, cube.param);
@@ -511,50 +527,76 @@ TEST(UntangleMap, FoldedFreeVerticesAreUnfoldedAndEverythingElseKept) {
   const std::vector<long> cones = quarter_turns(igm);
   bool integral = false;
   const int64_t area = exact_parametric_area(igm, &integral);
-  std::vector<char> free(mesh.num_vertices(), 1);
-  for (int h = 0; h < mesh.num_halfedges(); ++h)
-    if (igm.is_cut[mesh.edge_of[h]] || mesh.opposite[h] < 0) free[mesh.from(h)] = free[mesh.to(h)] = 0;
-  // Fold a few free vertices that share no triangle.
-  std::vector<char> touched(mesh.num_vertices(), 0);
-  int folded = 0;
-  for (int f = 0; f < mesh.num_faces() && folded < 4; ++f) {
-    const int v = mesh.F(f, 0), w = mesh.F(f, 1);
-    if (!free[v] || touched[v]) continue;
-    bool near = false;
-    for (int g = 0; g < mesh.num_faces(); ++g)
-      for (int k = 0; k < 3; ++k)
-        if (mesh.F(g, k) == v)
-          for (int j = 0; j < 3; ++j) near = near || touched[mesh.F(g, j)];
-    if (near) continue;
-    const IVec2 p = igm.uv[3 * f], q = igm.uv[3 * f + 1];
-    const IVec2 past{q[0] + (q[0] - p[0]) / 2, q[1] + (q[1] - p[1]) / 2};
-    for (int c = 0; c < 3 * mesh.num_faces(); ++c)
-      if (mesh.F(c / 3, c % 3) == v) igm.uv[c] = past;
-    touched[v] = touched[w] = 1;
-    ++folded;
+  // The cube's edges: both ends on the same two faces of the cube ([0, 4]^3).
+  auto cube_faces = [&](int v) {
+    std::vector<int> faces;
+    for (int a = 0; a < 3; ++a)
+      for (double side : {0.0, 4.0})
+        if (std::abs(mesh.V(v, a) - side) < 1e-9) faces.push_back(2 * a + (side > 0));
+    return faces;
+  };
+  std::vector<char> on_cube_edge(mesh.num_edges(), 0);
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e];
+    const std::vector<int> a = cube_faces(mesh.from(h)), b = cube_faces(mesh.to(h));
+    on_cube_edge[e] = a.size() >= 2 && b.size() >= 2 && (a == b || a.size() == 3 || b.size() == 3);
   }
-  ASSERT_GE(folded, 3);
+  std::vector<IsolineConstraint> isolines;
+  if (cube_edges_are_isolines) isolines = isoline_constraints(mesh, igm.to_double(), on_cube_edge, false);
+  // Fold vertices that share no triangle: off the cut, on the cut, and along a cube edge.
+  enum Kind { OffCut, OnCut, AlongCubeEdge };
+  std::vector<char> on_cut(mesh.num_vertices(), 0), touched(mesh.num_vertices(), 0);
+  for (int h = 0; h < mesh.num_halfedges(); ++h)
+    if (igm.is_cut[mesh.edge_of[h]]) on_cut[mesh.from(h)] = on_cut[mesh.to(h)] = 1;
+  std::map<Kind, int> folded;
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const int v = mesh.from(h), w = mesh.to(h);
+    if (cube_faces(v).size() == 3 || touched[v]) continue;
+    const Kind kind = !on_cut[v] ? OffCut : on_cube_edge[mesh.edge_of[h]] && cube_edges_are_isolines ? AlongCubeEdge : OnCut;
+    if (folded[kind] >= 2 || (kind == OnCut && cube_edges_are_isolines)) continue;
+    bool near = false;
+    for (int g : outgoing_halfedges(mesh, v))
+      for (int j = 0; j < 3; ++j) near = near || touched[mesh.F(g / 3, j)];
+    if (near) continue;
+    const IVec2 p = igm.uv[h], q = igm.uv[TriMesh::next(h)];
+    move_exact_vertex(mesh, igm, h, {(q[0] - p[0]) * 3 / 2, (q[1] - p[1]) * 3 / 2});
+    touched[v] = touched[w] = 1;
+    ++folded[kind];
+  }
+  ASSERT_EQ(folded[OffCut], 2);
+  ASSERT_EQ(folded[cube_edges_are_isolines ? AlongCubeEdge : OnCut], 2);
+  ASSERT_EQ(exact_transition_residual(mesh, igm), 0);
   const ExactParametrization before = igm;
   int flipped = 0, degenerate = 0;
   count_exact_irregular(igm, &flipped, &degenerate);
   ASSERT_GT(flipped, 0);
   Progress progress;
-  const MapUntangleStats stats = untangle_map(mesh, {}, igm, progress);
+  const MapUntangleStats stats = untangle_map(mesh, {}, isolines, igm, progress);
   EXPECT_EQ(stats.flipped_before, flipped);
   EXPECT_EQ(stats.flipped_after, 0);
   EXPECT_EQ(stats.degenerate_after, 0);
+  EXPECT_GE(stats.moved_vertices, 4);
   count_exact_irregular(igm, &flipped, &degenerate);
   EXPECT_EQ(flipped + degenerate, 0);
+  EXPECT_EQ(exact_transition_residual(mesh, igm), 0);
   EXPECT_EQ(exact_parametric_area(igm, &integral), area);
   EXPECT_TRUE(integral);
   EXPECT_EQ(igm.rotation, before.rotation);
   EXPECT_EQ(igm.translation, before.translation);
   EXPECT_EQ(igm.is_cut, before.is_cut);
   for (int c = 0; c < 3 * mesh.num_faces(); ++c)
-    if (!free[mesh.F(c / 3, c % 3)]) EXPECT_EQ(igm.uv[c], before.uv[c]) << c;
+    if (cube_faces(mesh.F(c / 3, c % 3)).size() == 3) EXPECT_EQ(igm.uv[c], before.uv[c]) << c;
+  for (const IsolineConstraint& iso : isolines) {
+    const int h = iso.halfedge;
+    EXPECT_EQ(igm.uv[h][iso.axis], before.uv[h][iso.axis]) << h;
+    EXPECT_EQ(igm.uv[TriMesh::next(h)][iso.axis], before.uv[TriMesh::next(h)][iso.axis]) << h;
+  }
   EXPECT_EQ(quarter_turns(igm), cones);  // no cone appeared or moved
   extract_and_check("untangled cube", mesh, igm, 6 * 4 * 4 * 3 * 3);
 }
+
+INSTANTIATE_TEST_SUITE_P(UntangleMap, UntangleMapFolds, ::testing::Bool(),
+                         [](const auto& info) { return info.param ? "CubeEdgesAreIsolines" : "NoIsolines"; });
 
 QuadMesh quads_of(const std::vector<std::array<int, 4>>& faces, int num_vertices) {
   QuadMesh q;

@@ -551,6 +551,8 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
     stats.unresolved_equations = exact.unresolved_equations;
     result.param = std::move(exact.param);
+    result.snapped_vertices = snap_vertices;
+    result.isolines = iso;
     count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
     stats.seconds_sanitize += sanitize_timer.seconds();
   };
@@ -571,8 +573,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     if (stats.flipped_triangles + stats.degenerate_triangles < before) {
       stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles without)";
     } else {
-      result.continuous = first.continuous;
-      result.param = first.param;
+      result = first;
       const int iterations = stats.penalty_iterations;
       stats = first_stats;
       stats.penalty_iterations = iterations;
@@ -601,8 +602,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
       stats.fallback_used = true;
       stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles before)";
     } else {
-      result.continuous = global.continuous;
-      result.param = global.param;
+      result = global;
       stats = global_stats;
       stats.path = "global (all-faces fallback did not help)";
     }

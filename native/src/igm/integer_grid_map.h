@@ -29,6 +29,7 @@
 #include "core/mesh.h"
 #include "core/parametrization.h"
 #include "core/progress.h"
+#include "core/sanitize_isolines.h"
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
 #include "quantization/quantization.h"
@@ -85,6 +86,8 @@ struct IntegerGridMap {
   ExactParametrization param;  // exact integer-grid map (input of extract_quads)
   Parametrization continuous;  // the solved map before rounding (quad units)
   IgmStats stats;
+  std::vector<char> snapped_vertices;     // #V: held on integer points (singular, corners, seeds)
+  std::vector<IsolineConstraint> isolines;  // feature and boundary edges held on integer isolines
 };
 
 // mesh: one component (connectivity built); field, cut: its cross field and cut graph (frames,

@@ -23,17 +23,55 @@ struct RingKey {
   bool better_than(const RingKey& o) const { return bad < o.bad || (bad == o.bad && smallest > o.smallest); }
 };
 
+// How a vertex may move, in the chart of its first corner.
+struct Freedom {
+  enum Kind { Pinned, Line, Plane } kind = Plane;
+  int axis = 0;  // Line: the coordinate that may change
+};
+
+// The corners around each vertex and the rotation (quarter turns) that takes the chart of the
+// vertex's first corner to each corner's chart; false where the rotations around an interior vertex
+// do not add up to none (a cone: it has no consistent move).
+bool corner_turns(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& corners,
+                  std::vector<int8_t>& turn) {
+  turn[corners[0]] = 0;
+  std::vector<int> stack{corners[0]};
+  bool consistent = true;
+  auto reach = [&](int c, int r) {
+    r = ((r % 4) + 4) % 4;
+    if (turn[c] < 0) {
+      turn[c] = static_cast<int8_t>(r);
+      stack.push_back(c);
+    } else if (turn[c] != r) {
+      consistent = false;
+    }
+  };
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    const int f = c / 3, k = c % 3;
+    const int out = c, in = 3 * f + (k + 2) % 3;  // the halfedges of f leaving and entering the vertex
+    if (const int o = mesh.opposite[out]; o >= 0) reach(3 * (o / 3) + (o % 3 + 1) % 3, turn[c] + param.rotation[out]);
+    if (const int o = mesh.opposite[in]; o >= 0) reach(o, turn[c] + param.rotation[in]);
+  }
+  return consistent;
+}
+
 }  // namespace
 
-MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feature_edges, ExactParametrization& param,
+MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinned,
+                              const std::vector<IsolineConstraint>& isolines, ExactParametrization& param,
                               Progress& progress, int max_rings) {
   Timer timer;
   MapUntangleStats stats;
   const int nv = mesh.num_vertices(), nf = mesh.num_faces();
-  if (static_cast<int>(param.uv.size()) != 3 * nf || static_cast<int>(param.is_cut.size()) != mesh.num_edges())
+  if (static_cast<int>(param.uv.size()) != 3 * nf || static_cast<int>(param.rotation.size()) != 3 * nf)
     throw Error(ErrorCode::Internal, "map untangle: the map does not match the mesh");
-  if (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges())
-    throw Error(ErrorCode::Internal, "map untangle: the feature edges do not match the mesh");
+  if (!pinned.empty() && static_cast<int>(pinned.size()) != nv)
+    throw Error(ErrorCode::Internal, "map untangle: the pinned vertices do not match the mesh");
+  for (const IsolineConstraint& c : isolines)
+    if (c.halfedge < 0 || c.halfedge >= 3 * nf || c.axis < 0 || c.axis > 1)
+      throw Error(ErrorCode::Internal, "map untangle: an isoline does not match the mesh");
   // Marks the flipped and degenerate triangles of the current map and counts them.
   std::vector<char> bad(nf, 0);
   auto count_bad = [&](int* flipped, int* degenerate) {
@@ -53,25 +91,43 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
     return stats;
   }
 
-  // Corners of each vertex; free vertices: no boundary, cut or feature edge, one uv.
+  // Corners of each vertex, their charts' rotations, and how each vertex may move.
   std::vector<std::vector<int>> corners(nv);
   for (int c = 0; c < 3 * nf; ++c) corners[mesh.F(c / 3, c % 3)].push_back(c);
-  std::vector<char> free(nv, 1);
-  for (int h = 0; h < 3 * nf; ++h) {
-    const int e = mesh.edge_of[h];
-    if (mesh.is_boundary_edge(e) || param.is_cut[e] || (!feature_edges.empty() && feature_edges[e]))
-      free[mesh.from(h)] = free[mesh.to(h)] = 0;
-  }
+  std::vector<int8_t> turn(3 * nf, -1);
+  std::vector<Freedom> freedom(nv);
   for (int v = 0; v < nv; ++v)
-    for (int c : corners[v])
-      if (param.uv[c] != param.uv[corners[v][0]]) free[v] = 0;
+    if (corners[v].empty() || (!pinned.empty() && pinned[v]) || !corner_turns(mesh, param, corners[v], turn))
+      freedom[v].kind = Freedom::Pinned;
+  // An isoline keeps the coordinate `axis` of its corners in its face's chart: in the first
+  // corner's chart, the coordinate (axis + turn) % 2.
+  std::vector<int> blocked(nv, 0);  // bit a: coordinate a is fixed
+  for (const IsolineConstraint& iso : isolines) {
+    const int f = iso.halfedge / 3, k = iso.halfedge % 3;
+    for (const int c : {3 * f + k, 3 * f + (k + 1) % 3})
+      if (turn[c] >= 0) blocked[mesh.F(f, c % 3)] |= 1 << ((iso.axis + turn[c]) % 2);
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (freedom[v].kind == Freedom::Pinned || blocked[v] == 0) continue;
+    if (blocked[v] == 3) {
+      freedom[v].kind = Freedom::Pinned;
+    } else {
+      freedom[v].kind = Freedom::Line;
+      freedom[v].axis = blocked[v] == 1 ? 1 : 0;
+    }
+  }
 
-  auto ring_key = [&](int v, const IVec2& p) {
+  // The uv of v's corner c after v moves by d in its first corner's chart.
+  auto moved_corner = [&](int c, const IVec2& d) {
+    const IVec2 r = rotate_quarter(d, turn[c]);
+    return IVec2{param.uv[c][0] + r[0], param.uv[c][1] + r[1]};
+  };
+  auto ring_key = [&](int v, const IVec2& d) {
     RingKey key;
     bool first = true;
     for (int c : corners[v]) {
       const int f = c / 3, k = c % 3;
-      const __int128 area = doubled_area(p, param.uv[3 * f + (k + 1) % 3], param.uv[3 * f + (k + 2) % 3]);
+      const __int128 area = doubled_area(moved_corner(c, d), param.uv[3 * f + (k + 1) % 3], param.uv[3 * f + (k + 2) % 3]);
       key.bad += area <= 0;
       if (first || area < key.smallest) key.smallest = area;
       first = false;
@@ -105,32 +161,36 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
     }
     return static_cast<int>(std::lround(sum / (M_PI / 2)));
   };
-  std::vector<double> c_terms;
+  std::vector<double> c_terms, g_line;
   std::vector<Vec2> g_terms;
+  std::vector<IVec2> old_uv;
   std::vector<char> moved(nv, 0);
   auto improve = [&](int v) {
-    const IVec2 p0 = param.uv[corners[v][0]];
+    const Freedom& free = freedom[v];
     double scale = 0;
     for (int c : corners[v]) {
-      const IVec2& a = param.uv[3 * (c / 3) + (c % 3 + 1) % 3];
-      scale += std::hypot(static_cast<double>(a[0] - p0[0]), static_cast<double>(a[1] - p0[1]));
+      const IVec2 &p = param.uv[c], &a = param.uv[3 * (c / 3) + (c % 3 + 1) % 3];
+      scale += std::hypot(static_cast<double>(a[0] - p[0]), static_cast<double>(a[1] - p[1]));
     }
     scale /= corners[v].size();
     if (!(scale > 0)) return false;
-    // Areas in units of scale^2, linear in the move d (units of scale).
+    // Areas in units of scale^2, linear in the move d (units of scale, first corner's chart).
     c_terms.clear();
     g_terms.clear();
+    g_line.clear();
     for (int c : corners[v]) {
       const int f = c / 3, k = c % 3;
-      const IVec2& ia = param.uv[3 * f + (k + 1) % 3];
-      const IVec2& ib = param.uv[3 * f + (k + 2) % 3];
-      const Vec2 a((ia[0] - p0[0]) / scale, (ia[1] - p0[1]) / scale), b((ib[0] - p0[0]) / scale, (ib[1] - p0[1]) / scale);
+      const IVec2 &p = param.uv[c], &ia = param.uv[3 * f + (k + 1) % 3], &ib = param.uv[3 * f + (k + 2) % 3];
+      const Vec2 a((ia[0] - p[0]) / scale, (ia[1] - p[1]) / scale), b((ib[0] - p[0]) / scale, (ib[1] - p[1]) / scale);
       c_terms.push_back(a.x() * b.y() - a.y() * b.x());
-      g_terms.emplace_back(a.y() - b.y(), b.x() - a.x());
+      g_terms.push_back(rotate_quarter(Vec2(a.y() - b.y(), b.x() - a.x()), -turn[c]));
+      g_line.push_back(g_terms.back()[free.axis]);
     }
-    const Vec2 d = maximize_worst_term(c_terms, g_terms, Vec2::Zero(), 1.0);
+    Vec2 d = Vec2::Zero();
+    if (free.kind == Freedom::Plane) d = maximize_worst_term(c_terms, g_terms, Vec2::Zero(), 1.0);
+    if (free.kind == Freedom::Line) d[free.axis] = maximize_worst_term_1d(c_terms, g_line);
     if (d.isZero()) return false;
-    const RingKey now = ring_key(v, p0);
+    const RingKey now = ring_key(v, IVec2{0, 0});
     // The interior vertices of v's triangles keep their angle sums, or get one a locally injective
     // map has: no cone appears (a ring wound twice has positive triangles but 8 quarter turns).
     std::vector<int> ring;
@@ -141,11 +201,13 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
       }
     std::vector<int> turns_now(ring.size());
     for (size_t i = 0; i < ring.size(); ++i) turns_now[i] = quarter_turns(ring[i]);
+    old_uv.clear();
+    for (int c : corners[v]) old_uv.push_back(param.uv[c]);
     for (double step = 1; step > 0.1; step *= 0.5) {
-      const IVec2 p{p0[0] + static_cast<int64_t>(std::llround(step * d.x() * scale)),
-                    p0[1] + static_cast<int64_t>(std::llround(step * d.y() * scale))};
-      if (p == p0 || !ring_key(v, p).better_than(now)) continue;
-      for (int c : corners[v]) param.uv[c] = p;
+      const IVec2 move{static_cast<int64_t>(std::llround(step * d.x() * scale)),
+                       static_cast<int64_t>(std::llround(step * d.y() * scale))};
+      if (move == IVec2{0, 0} || !ring_key(v, move).better_than(now)) continue;
+      for (int c : corners[v]) param.uv[c] = moved_corner(c, move);
       bool cones_kept = true;
       for (size_t i = 0; i < ring.size() && cones_kept; ++i) {
         const int turns = quarter_turns(ring[i]);
@@ -155,7 +217,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
         moved[v] = 1;
         return true;
       }
-      for (int c : corners[v]) param.uv[c] = p0;
+      for (size_t i = 0; i < corners[v].size(); ++i) param.uv[corners[v][i]] = old_uv[i];
     }
     return false;
   };
@@ -177,7 +239,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& feat
     }
     std::vector<int> movable;
     for (int v = 0; v < nv; ++v)
-      if (in_region[v] && free[v]) movable.push_back(v);
+      if (in_region[v] && freedom[v].kind != Freedom::Pinned) movable.push_back(v);
     for (int sweep = 0; sweep < 30; ++sweep) {
       progress.check_cancel();
       bool any = false;

@@ -465,7 +465,7 @@ void Session::run_igm_stage(Job job, Progress& progress) {
       state.igm = std::move(map.param);
       IgmStats& s = state.igm_stats;
       if (s.flipped_triangles + s.degenerate_triangles > 0) {
-        const MapUntangleStats u = untangle_map(state.mesh, state.field->feature_edge, *state.igm, progress);
+        const MapUntangleStats u = untangle_map(state.mesh, map.snapped_vertices, map.isolines, *state.igm, progress);
         s.untangled_vertices = u.moved_vertices;
         s.flipped_before_untangle = u.flipped_before;
         s.degenerate_before_untangle = u.degenerate_before;
