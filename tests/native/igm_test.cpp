@@ -186,6 +186,8 @@ Figures check_chain(const std::string& name, int target, const Chain& c, bool fe
   count_exact_irregular(p, &flipped, &degenerate);
   EXPECT_EQ(flipped, igm.stats.flipped_triangles);
   EXPECT_EQ(degenerate, igm.stats.degenerate_triangles);
+  EXPECT_EQ(igm.stats.winding_defects, 0);  // every one-ring winds by its cone angle
+  EXPECT_EQ(count_exact_winding_defects(c.mesh, p, cone_quarter_turns(c.mesh, c.field)), igm.stats.winding_defects);
   EXPECT_TRUE(igm.stats.area_is_integral);
   EXPECT_EQ(igm.stats.parametric_area, c.quantization.quads_expected);
   if (igm.stats.flipped_triangles == 0 && igm.stats.degenerate_triangles == 0) {

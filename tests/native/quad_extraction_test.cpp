@@ -570,6 +570,8 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
   int flipped = 0, degenerate = 0;
   count_exact_irregular(igm, &flipped, &degenerate);
   ASSERT_GT(flipped, 0);
+  const std::vector<int> cone_turns(cones.begin(), cones.end());
+  EXPECT_GT(count_exact_winding_defects(mesh, igm, cone_turns), 0);  // a folded vertex has no full turn
   Progress progress;
   const MapUntangleStats stats = untangle_map(mesh, {}, isolines, igm, progress);
   EXPECT_EQ(stats.flipped_before, flipped);
@@ -592,6 +594,7 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
     EXPECT_EQ(igm.uv[TriMesh::next(h)][iso.axis], before.uv[TriMesh::next(h)][iso.axis]) << h;
   }
   EXPECT_EQ(quarter_turns(igm), cones);  // no cone appeared or moved
+  EXPECT_EQ(count_exact_winding_defects(mesh, igm, cone_turns), 0);
   extract_and_check("untangled cube", mesh, igm, 6 * 4 * 4 * 3 * 3);
 }
 

@@ -353,6 +353,19 @@ void count_exact_irregular(const ExactParametrization& param, int* flipped, int*
   }
 }
 
+int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& cone_turns) {
+  std::vector<double> angle(mesh.num_vertices(), 0);
+  for (int c = 0; c < 3 * mesh.num_faces(); ++c) {
+    const int f = c / 3, k = c % 3;
+    const IVec2 &p = param.uv[c], &a = param.uv[3 * f + (k + 1) % 3], &b = param.uv[3 * f + (k + 2) % 3];
+    const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
+    angle[mesh.F(f, k)] += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+  }
+  int defects = 0;
+  for (int v = 0; v < mesh.num_vertices(); ++v) defects += std::lround(angle[v] / (M_PI / 2)) != cone_turns[v];
+  return defects;
+}
+
 int64_t exact_parametric_area(const ExactParametrization& param, bool* integral) {
   __int128 sum = 0;
   const int nf = static_cast<int>(param.uv.size() / 3);
@@ -401,6 +414,9 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   IntegerGridMap result;
   IgmStats& stats = result.stats;
   const double scale = quantization.scale;
+  const std::vector<int> cones = cone_quarter_turns(mesh, field);
+  // Flipped and degenerate triangles and wound one-rings: what the escalations try to remove.
+  auto irregular = [&] { return stats.flipped_triangles + stats.degenerate_triangles + stats.winding_defects; };
 
   // The problem at the quantization's scale: 1 uv unit = one quad edge.
   ParametrizationProblem problem(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
@@ -554,6 +570,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     result.snapped_vertices = snap_vertices;
     result.isolines = iso;
     count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
+    stats.winding_defects = count_exact_winding_defects(mesh, result.param, cones);
     stats.seconds_sanitize += sanitize_timer.seconds();
   };
   progress.update(0.42);
@@ -562,16 +579,15 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   stats.penalty_integer_residual = integer_residual(pose);
 
   // Escalation: the paper's penalty phase with re-linearized regularity constraints.
-  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity &&
-      !options.penalty_regularity && options.escalate) {
+  if (irregular() > 0 && options.regularity && !options.penalty_regularity && options.escalate) {
     const IntegerGridMap first = result;
     const IgmStats first_stats = stats;
-    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    const int before = irregular();
     solution = solve_global(true, 0.45, 0.85);
     round_exactly(solution.param);
     stats.penalty_integer_residual = integer_residual(pose);
-    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
-      stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles without)";
+    if (irregular() < before) {
+      stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
     } else {
       result = first;
       const int iterations = stats.penalty_iterations;
@@ -583,8 +599,7 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
 
   // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
   // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
-  if ((stats.flipped_triangles > 0 || stats.degenerate_triangles > 0) && options.regularity && options.allow_fallback &&
-      options.escalate) {
+  if (irregular() > 0 && options.regularity && options.allow_fallback && options.escalate) {
     Parametrization seamless_pose = seamless.param;
     seamless_pose.uv *= scale;
     so.regularity = RegularityMode::AllFaces;
@@ -594,13 +609,13 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
     const ParametrizationSolution all = problem.solve(so, progress);
     stats.ipopt_solves += all.stats.ipopt_solves;
     stats.ipopt_iterations += all.stats.ipopt_iterations;
-    const int before = stats.flipped_triangles + stats.degenerate_triangles;
+    const int before = irregular();
     const IntegerGridMap global = result;
     const IgmStats global_stats = stats;
     round_exactly(all.param);
-    if (stats.flipped_triangles + stats.degenerate_triangles < before) {
+    if (irregular() < before) {
       stats.fallback_used = true;
-      stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles before)";
+      stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
     } else {
       result = global;
       stats = global_stats;
@@ -633,7 +648,8 @@ Json igm_report(const IgmStats& s) {
               {"seconds_sanitize", s.seconds_sanitize},
               {"flipped_before_untangle", s.flipped_before_untangle},
               {"degenerate_before_untangle", s.degenerate_before_untangle},
-              {"untangled_vertices", s.untangled_vertices}};
+              {"untangled_vertices", s.untangled_vertices},
+              {"winding_defects", s.winding_defects}};
 }
 
 }  // namespace qgp

@@ -66,6 +66,8 @@ struct IgmStats {
   int degenerate_triangles = 0;     // in the exact result
   int flipped_before_untangle = 0, degenerate_before_untangle = 0;  // set by the caller's untangle
   int untangled_vertices = 0;       // (untangle_map) of the solve's exact result
+  int winding_defects = 0;          // vertices whose angle sum differs from their cone angle (a
+                                    // flip-free map can wind a one-ring twice)
   double max_integer_residual = 0;  // before snapping: largest distance of a singular vertex /
                                     // transition translation / feature isoline from an integer
   double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)
@@ -117,6 +119,10 @@ std::vector<IgmRow> integer_grid_rows(const TriMesh& mesh, const ExactParametriz
 
 // Exact counts of flipped (area < 0) and degenerate (area == 0) triangles.
 void count_exact_irregular(const ExactParametrization& param, int* flipped, int* degenerate);
+
+// Vertices whose angle sum in the exact map, in quarter turns, is not cone_turns[v] (#V, e.g. the
+// cross field's cone_quarter_turns).
+int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& cone_turns);
 // Sum of the signed triangle areas in uv (quad units), rounded toward zero; *integral tells
 // whether it is a whole number.
 int64_t exact_parametric_area(const ExactParametrization& param, bool* integral);

@@ -445,12 +445,13 @@ void Session::run_quantization_stage(Progress& progress) {
 
 void Session::run_igm_stage(Job job, Progress& progress) {
   Json per_component = Json::array();
-  int flipped = 0, degenerate = 0, fallbacks = 0;
+  int flipped = 0, degenerate = 0, wound = 0, fallbacks = 0;
   double residual = 0;
   // Quads have a fallback (the T-mesh layout), grid UVs do not: only they pay for the escalations.
   const bool escalate = job == Job::GridUV;
   for_each_component("igm", progress, [&](size_t, ComponentState& state) {
-    const bool irregular = state.igm_stats.flipped_triangles + state.igm_stats.degenerate_triangles > 0;
+    const IgmStats& old = state.igm_stats;
+    const bool irregular = old.flipped_triangles + old.degenerate_triangles + old.winding_defects > 0;
     if (state.igm && escalate && !state.igm_escalated && irregular && state.igm_stats.path != "round") state.igm.reset();
     if (!state.igm) {
       state.quads.reset();
@@ -472,17 +473,20 @@ void Session::run_igm_stage(Job job, Progress& progress) {
         s.flipped_triangles = u.flipped_after;
         s.degenerate_triangles = u.degenerate_after;
         s.seconds += u.seconds;
+        s.winding_defects = count_exact_winding_defects(state.mesh, *state.igm, cone_quarter_turns(state.mesh, *state.field));
       }
     }
     const IgmStats& s = state.igm_stats;
     flipped += s.flipped_triangles;
     degenerate += s.degenerate_triangles;
+    wound += s.winding_defects;
     fallbacks += s.fallback_used;
     residual = std::max(residual, s.max_integer_residual);
     per_component.push_back(igm_report(s));
   });
   report_["igm"] = {{"flipped_triangles", flipped},
                     {"degenerate_triangles", degenerate},
+                    {"winding_defects", wound},
                     {"max_integer_residual", residual},
                     {"fallback_used", fallbacks > 0},
                     {"components", std::move(per_component)}};
@@ -528,9 +532,11 @@ void Session::run_quad_stage(Progress& progress) {
       };
       // The integer-grid map's quads when the map is valid and they form a valid mesh.
       std::string why_not_igm;
-      if (state.igm_stats.flipped_triangles + state.igm_stats.degenerate_triangles > 0) {
-        why_not_igm = std::to_string(state.igm_stats.flipped_triangles) + " flipped and " +
-                      std::to_string(state.igm_stats.degenerate_triangles) + " degenerate triangle(s) in the integer-grid map";
+      const IgmStats& igm = state.igm_stats;
+      if (igm.flipped_triangles + igm.degenerate_triangles + igm.winding_defects > 0) {
+        why_not_igm = std::to_string(igm.flipped_triangles) + " flipped and " + std::to_string(igm.degenerate_triangles) +
+                      " degenerate triangle(s) and " + std::to_string(igm.winding_defects) +
+                      " wound one-ring(s) in the integer-grid map";
       } else {
         try {
           QuadExtraction extraction = extract_quads(state.mesh, *state.igm, QuadExtractionOptions{}, progress);
