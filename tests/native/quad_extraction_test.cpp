@@ -511,20 +511,7 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
   const auto cube = scaled(test::make_grid_cube(4), 3);
   const TriMesh& mesh = cube.mesh;
   ExactParametrization igm = to_igm(mesh, cube.param);
-  // Angle sum of every vertex in quarter turns (corner angles do not depend on the chart).
-  auto quarter_turns = [&](const ExactParametrization& map) {
-    std::vector<double> sum(mesh.num_vertices(), 0);
-    for (int c = 0; c < 3 * mesh.num_faces(); ++c) {
-      const int f = c / 3, k = c % 3;
-      const IVec2 &p = map.uv[c], &a = map.uv[3 * f + (k + 1) % 3], &b = map.uv[3 * f + (k + 2) % 3];
-      const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
-      sum[mesh.F(f, k)] += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-    }
-    std::vector<long> turns(sum.size());
-    for (size_t v = 0; v < sum.size(); ++v) turns[v] = std::lround(sum[v] / (M_PI / 2));
-    return turns;
-  };
-  const std::vector<long> cones = quarter_turns(igm);
+  const std::vector<int> cones = exact_angle_sums(mesh, igm);
   bool integral = false;
   const int64_t area = exact_parametric_area(igm, &integral);
   // The cube's edges: both ends on the same two faces of the cube ([0, 4]^3).
@@ -570,8 +557,7 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
   int flipped = 0, degenerate = 0;
   count_exact_irregular(igm, &flipped, &degenerate);
   ASSERT_GT(flipped, 0);
-  const std::vector<int> cone_turns(cones.begin(), cones.end());
-  EXPECT_GT(count_exact_winding_defects(mesh, igm, cone_turns), 0);  // a folded vertex has no full turn
+  EXPECT_GT(count_exact_winding_defects(mesh, igm, cones), 0);  // a folded vertex has no full turn
   Progress progress;
   const MapUntangleStats stats = untangle_map(mesh, {}, isolines, igm, progress);
   EXPECT_EQ(stats.flipped_before, flipped);
@@ -593,8 +579,8 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
     EXPECT_EQ(igm.uv[h][iso.axis], before.uv[h][iso.axis]) << h;
     EXPECT_EQ(igm.uv[TriMesh::next(h)][iso.axis], before.uv[TriMesh::next(h)][iso.axis]) << h;
   }
-  EXPECT_EQ(quarter_turns(igm), cones);  // no cone appeared or moved
-  EXPECT_EQ(count_exact_winding_defects(mesh, igm, cone_turns), 0);
+  EXPECT_EQ(exact_angle_sums(mesh, igm), cones);  // no cone appeared or moved
+  EXPECT_EQ(count_exact_winding_defects(mesh, igm, cones), 0);
   extract_and_check("untangled cube", mesh, igm, 6 * 4 * 4 * 3 * 3);
 }
 

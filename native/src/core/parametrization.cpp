@@ -56,6 +56,21 @@ int orient2d_exact(const IVec2& a, const IVec2& b, const IVec2& c) {
   return (d > 0) - (d < 0);
 }
 
+double exact_corner_angle(const ExactParametrization& param, int c) {
+  const int f = c / 3, k = c % 3;
+  const IVec2 &p = param.uv[c], &a = param.uv[3 * f + (k + 1) % 3], &b = param.uv[3 * f + (k + 2) % 3];
+  const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
+  return std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+}
+
+std::vector<int> exact_angle_sums(const TriMesh& mesh, const ExactParametrization& param) {
+  std::vector<double> angle(mesh.num_vertices(), 0);
+  for (int c = 0; c < 3 * mesh.num_faces(); ++c) angle[mesh.F(c / 3, c % 3)] += exact_corner_angle(param, c);
+  std::vector<int> turns(angle.size());
+  for (size_t v = 0; v < angle.size(); ++v) turns[v] = static_cast<int>(std::lround(angle[v] / (M_PI / 2)));
+  return turns;
+}
+
 int64_t exact_transition_residual(const TriMesh& mesh, const ExactParametrization& param) {
   int64_t worst = 0;
   for (int h = 0; h < mesh.num_halfedges(); ++h) {

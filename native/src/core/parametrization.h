@@ -103,6 +103,12 @@ SanitizeResult sanitize_parametrization(const TriMesh& mesh, const Parametrizati
 // Largest |transfer(corner) - corner on the other side| in grid units; 0 means exactly seamless.
 int64_t exact_transition_residual(const TriMesh& mesh, const ExactParametrization& param);
 
+// Signed angle (radians) of corner c (= 3f + k) in its face's chart.
+double exact_corner_angle(const ExactParametrization& param, int c);
+// Angle sum of every vertex in quarter turns, rounded (4 at a regular interior vertex of a locally
+// injective map, 2 on a straight boundary; the corner angles do not depend on the chart).
+std::vector<int> exact_angle_sums(const TriMesh& mesh, const ExactParametrization& param);
+
 // Exact orientation test on grid points: sign of (b - a) x (c - a). Inputs must stay below
 // 2^61 in magnitude (products are formed in 128-bit integers).
 int orient2d_exact(const IVec2& a, const IVec2& b, const IVec2& c);

@@ -354,15 +354,9 @@ void count_exact_irregular(const ExactParametrization& param, int* flipped, int*
 }
 
 int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& cone_turns) {
-  std::vector<double> angle(mesh.num_vertices(), 0);
-  for (int c = 0; c < 3 * mesh.num_faces(); ++c) {
-    const int f = c / 3, k = c % 3;
-    const IVec2 &p = param.uv[c], &a = param.uv[3 * f + (k + 1) % 3], &b = param.uv[3 * f + (k + 2) % 3];
-    const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
-    angle[mesh.F(f, k)] += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-  }
+  const std::vector<int> turns = exact_angle_sums(mesh, param);
   int defects = 0;
-  for (int v = 0; v < mesh.num_vertices(); ++v) defects += std::lround(angle[v] / (M_PI / 2)) != cone_turns[v];
+  for (int v = 0; v < mesh.num_vertices(); ++v) defects += turns[v] != cone_turns[v];
   return defects;
 }
 

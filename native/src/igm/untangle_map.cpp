@@ -153,12 +153,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
   };
   auto quarter_turns = [&](int u) {
     double sum = 0;
-    for (int c : corners[u]) {
-      const int f = c / 3, k = c % 3;
-      const IVec2 &p = param.uv[c], &a = param.uv[3 * f + (k + 1) % 3], &b = param.uv[3 * f + (k + 2) % 3];
-      const double ax = a[0] - p[0], ay = a[1] - p[1], bx = b[0] - p[0], by = b[1] - p[1];
-      sum += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-    }
+    for (int c : corners[u]) sum += exact_corner_angle(param, c);
     return static_cast<int>(std::lround(sum / (M_PI / 2)));
   };
   std::vector<double> c_terms, g_line;
@@ -267,14 +262,12 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
   // at 2 000 and 8 000 quads).
   const ExactParametrization start = param;
   run_rounds(movable);
-  const ExactParametrization first = param;
-  const MapUntangleStats first_stats = stats;
-  const std::vector<char> first_moved = moved;
   if (stats.flipped_after + stats.degenerate_after > 0) {
+    const ExactParametrization first = param;
+    const MapUntangleStats first_stats = stats;
+    const std::vector<char> first_moved = moved;
     param = start;
     std::fill(moved.begin(), moved.end(), 0);
-    stats.flipped_after = stats.flipped_before;
-    stats.degenerate_after = stats.degenerate_before;
     count_bad(&stats.flipped_after, &stats.degenerate_after);
     run_rounds(simple);
     run_rounds(movable);
