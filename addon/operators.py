@@ -232,7 +232,15 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
         if self.mark_seams:
             message += f", {blender_mesh.mark_seams(mesh, self._source, cuts)} seam edges marked"
         mesh.update()
-        self.report({"INFO"}, message)
+        # A map the global solve left flipped: its valid fallback lives on a refined mesh, which the
+        # source object's loops cannot hold (`qgp remesh --uv-out` writes it).
+        igm = self._session.report().get("igm", {})
+        flipped = igm.get("flipped_triangles", 0)
+        if flipped:
+            self.report({"WARNING"}, f"{message}; {flipped} triangle(s) of the map are flipped "
+                                     "(the command line's --uv-out writes a flip-free map on a refined mesh)")
+        else:
+            self.report({"INFO"}, message)
         return {"FINISHED"}
 
     def draw(self, context):

@@ -203,12 +203,17 @@ UvMap available_uv_map(const qgp::Session& session) {
 void write_uv_output(const std::string& path, const qgp::Session& session, UvMap map) {
   const auto& components = session.components();
   const qgp::IntakeResult* intake = session.intake();
-  // Intake vertices keep their indices; vertices the pipeline added (split centroids) follow.
+  // A component whose integer-grid map fell back to the cell map is written as the mesh with the
+  // T-mesh inserted (its extra vertices follow the intake's, like the pipeline's split centroids).
+  auto uv_mesh = [&](const qgp::ComponentState& c) -> const qgp::TriMesh& {
+    return map == UvMap::IntegerGrid && c.cell_map ? c.cell_map->mesh : c.mesh;
+  };
   qgp::TriMesh out;
   int num_vertices = intake->mesh.num_vertices(), num_faces = 0;
   for (const auto& c : components) {
     for (int v : c.vertex_map) num_vertices += v < 0;
-    num_faces += c.mesh.num_faces();
+    num_vertices += uv_mesh(c).num_vertices() - c.mesh.num_vertices();
+    num_faces += uv_mesh(c).num_faces();
   }
   out.V.resize(num_vertices, 3);
   out.V.topRows(intake->mesh.num_vertices()) = intake->mesh.V;
@@ -216,15 +221,18 @@ void write_uv_output(const std::string& path, const qgp::Session& session, UvMap
   Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> uv(3 * num_faces, 2);
   int next_vertex = intake->mesh.num_vertices(), face = 0;
   for (const auto& c : components) {
-    std::vector<int> id(c.mesh.num_vertices());
-    for (int v = 0; v < c.mesh.num_vertices(); ++v) {
-      id[v] = c.vertex_map[v] >= 0 ? c.vertex_map[v] : next_vertex++;
-      out.V.row(id[v]) = c.mesh.V.row(v);
+    const qgp::TriMesh& mesh = uv_mesh(c);
+    std::vector<int> id(mesh.num_vertices());
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      id[v] = v < c.mesh.num_vertices() && c.vertex_map[v] >= 0 ? c.vertex_map[v] : next_vertex++;
+      out.V.row(id[v]) = mesh.V.row(v);
     }
-    for (int f = 0; f < c.mesh.num_faces(); ++f, ++face)
+    for (int f = 0; f < mesh.num_faces(); ++f, ++face)
       for (int k = 0; k < 3; ++k) {
-        out.F(face, k) = id[c.mesh.F(f, k)];
-        if (map == UvMap::IntegerGrid)
+        out.F(face, k) = id[mesh.F(f, k)];
+        if (map == UvMap::IntegerGrid && c.cell_map)
+          uv.row(3 * face + k) = c.cell_map->corner_uv[3 * f + k].transpose();
+        else if (map == UvMap::IntegerGrid)
           for (int a = 0; a < 2; ++a) uv(3 * face + k, a) = c.igm->to_double(c.igm->uv[3 * f + k][a]);
         else
           uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);

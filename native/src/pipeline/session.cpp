@@ -391,6 +391,8 @@ void Session::run_quantization_stage(Progress& progress) {
       state.quantization.reset();
     if (!state.quantization) {
       state.igm.reset();
+      state.cell_map.reset();
+      state.cell_map_report = Json();
       state.quads.reset();
       QuantizationOptions options;
       options.scale = scale;
@@ -445,7 +447,7 @@ void Session::run_quantization_stage(Progress& progress) {
 
 void Session::run_igm_stage(Job job, Progress& progress) {
   Json per_component = Json::array();
-  int flipped = 0, degenerate = 0, wound = 0, fallbacks = 0;
+  int flipped = 0, degenerate = 0, wound = 0, fallbacks = 0, cell_maps = 0;
   double residual = 0;
   // Quads have a fallback (the T-mesh layout), grid UVs do not: only they pay for the escalations.
   const bool escalate = job == Job::GridUV;
@@ -475,21 +477,43 @@ void Session::run_igm_stage(Job job, Progress& progress) {
         s.seconds += u.seconds;
         s.winding_defects = count_exact_winding_defects(state.mesh, *state.igm, cone_quarter_turns(state.mesh, *state.field));
       }
+      run_cell_map(state, progress);
     }
     const IgmStats& s = state.igm_stats;
     flipped += s.flipped_triangles;
     degenerate += s.degenerate_triangles;
     wound += s.winding_defects;
     fallbacks += s.fallback_used;
+    cell_maps += state.cell_map.has_value();
     residual = std::max(residual, s.max_integer_residual);
     per_component.push_back(igm_report(s));
+    if (!state.cell_map_report.is_null()) per_component.back()["cell_map"] = state.cell_map_report;
   });
   report_["igm"] = {{"flipped_triangles", flipped},
                     {"degenerate_triangles", degenerate},
                     {"winding_defects", wound},
                     {"max_integer_residual", residual},
-                    {"fallback_used", fallbacks > 0},
+                    {"fallback_used", fallbacks + cell_maps > 0},
+                    {"cell_map_components", cell_maps},
                     {"components", std::move(per_component)}};
+}
+
+void Session::run_cell_map(ComponentState& state, Progress& progress) {
+  state.cell_map.reset();
+  state.cell_map_report = Json();
+  // Degenerate triangles alone do not call for it: its collapsed cells have many more.
+  const IgmStats& s = state.igm_stats;
+  if (s.flipped_triangles + s.winding_defects == 0) return;
+  try {
+    CellMap map = map_cells_to_rectangles(state.mesh, *state.tmesh, state.quantization->x, progress);
+    state.cell_map_report = cell_map_stats_json(map.stats);
+    const bool used = map.stats.flipped_triangles == 0;
+    state.cell_map_report["used"] = used;
+    if (used) state.cell_map = std::move(map);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::StageFailed) throw;
+    state.cell_map_report = {{"used", false}, {"failure", e.what()}};
+  }
 }
 
 namespace {

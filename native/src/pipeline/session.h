@@ -10,6 +10,7 @@
 #include "core/quad_mesh.h"
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
+#include "igm/cell_map.h"
 #include "igm/integer_grid_map.h"
 #include "intake/intake.h"
 #include "intake/polygon_soup.h"
@@ -55,6 +56,11 @@ struct ComponentState {
   std::optional<ExactParametrization> igm;
   IgmStats igm_stats;                   // of the greedy path (path "round" for the baseline)
   bool igm_escalated = false;           // computed with IgmOptions::escalate (grid UV jobs)
+  // The fallback map on the mesh with the T-mesh inserted, when the global solve's map stays
+  // flipped or wound and the fallback has no flipped triangle (cell_map_report says how it went;
+  // null when it did not run).
+  std::optional<CellMap> cell_map;
+  Json cell_map_report;
   std::optional<QuadExtraction> quads;
   std::string quads_path;               // "integer-grid map" or "T-mesh layout (<why>)"
   LayoutQuadsStats layout_stats;        // when the quads come from the T-mesh layout
@@ -108,6 +114,8 @@ class Session {
   void run_tmesh_stage(Progress& progress);
   void run_quantization_stage(Progress& progress);
   void run_igm_stage(Job job, Progress& progress);
+  // The fallback cell map of a component whose integer-grid map is not valid (paper §7.1.1).
+  void run_cell_map(ComponentState& state, Progress& progress);
   void run_quad_stage(Progress& progress);
   void collect_results(Job job, Progress& progress);
   // Runs body(c, state) for every component inside progress stage `stage`, each with its share

@@ -1,0 +1,619 @@
+#include "igm/cell_map.h"
+
+#include <Eigen/SparseLU>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <queue>
+
+#include "core/error.h"
+#include "core/parametrization.h"
+#include "core/timer.h"
+#include "core/union_find.h"
+
+namespace qgp {
+namespace {
+
+constexpr double kOnSide = 1e-10;    // barycentric weight below which a trace point is on a side
+constexpr double kSamePoint = 1e-9;  // parameter distance below which two points are one
+
+[[noreturn]] void fail(const std::string& why) { throw Error(ErrorCode::StageFailed, "fallback cell map: " + why); }
+
+// Points of the refined mesh: the working mesh's vertices first, then points on its edges and
+// inside its faces, each made once.
+class RefinedPoints {
+ public:
+  explicit RefinedPoints(const TriMesh& mesh) : mesh_(mesh), on_edge_(mesh.num_edges()), in_face_(mesh.num_faces()) {
+    for (int v = 0; v < mesh.num_vertices(); ++v) position.push_back(mesh.position(v));
+  }
+
+  std::vector<Vec3> position;
+
+  // The point of sp, snapped onto a vertex or an edge where its barycentric weights vanish.
+  int of(const SurfacePoint& sp) {
+    const int f = sp.face;
+    Vec3 b = sp.barycentric.cwiseMax(0.0);
+    if (!(b.sum() > 0)) fail("a trace point has no barycentric coordinates");
+    b /= b.sum();
+    int zeros = 0, zero = -1;
+    for (int k = 0; k < 3; ++k)
+      if (b[k] < kOnSide) b[k] = 0, ++zeros, zero = k;
+    if (zeros >= 2) {
+      int k = 0;
+      b.maxCoeff(&k);
+      return mesh_.F(f, k);
+    }
+    if (zeros == 1) {
+      const int k = (zero + 1) % 3;  // halfedge 3f + k runs from corner k to corner k + 1
+      return on_halfedge(3 * f + k, b[(k + 1) % 3] / (b[k] + b[(k + 1) % 3]));
+    }
+    for (const auto& [existing, id] : in_face_[f])
+      if ((existing - b).cwiseAbs().maxCoeff() < kSamePoint) return id;
+    const int id = add(b[0] * mesh_.position(mesh_.F(f, 0)) + b[1] * mesh_.position(mesh_.F(f, 1)) +
+                       b[2] * mesh_.position(mesh_.F(f, 2)));
+    in_face_[f].push_back({b, id});
+    return id;
+  }
+
+  // The point sp of face sp.face where a trace passes into face `other`: on their common edge or
+  // vertex.
+  int shared(const SurfacePoint& sp, int other) {
+    const int f = sp.face;
+    Vec3 b = sp.barycentric.cwiseMax(0.0);
+    for (int k = 0; k < 3; ++k) {
+      const int o = mesh_.opposite[3 * f + k];
+      if (o < 0 || o / 3 != other) continue;
+      const double s = b[k] + b[(k + 1) % 3];
+      const double lambda = s > 0 ? b[(k + 1) % 3] / s : 0.5;
+      if (lambda < kOnSide) return mesh_.F(f, k);
+      if (lambda > 1 - kOnSide) return mesh_.F(f, (k + 1) % 3);
+      return on_halfedge(3 * f + k, lambda);
+    }
+    int best = -1;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        if (mesh_.F(f, k) == mesh_.F(other, j) && (best < 0 || b[k] > b[best])) best = k;
+    if (best < 0) fail("a trace jumps between faces " + std::to_string(f) + " and " + std::to_string(other) +
+                       ", which do not touch");
+    return mesh_.F(f, best);
+  }
+
+  // Points on edge e as (parameter along halfedge h, point), sorted.
+  std::vector<std::pair<double, int>> along(int h) const {
+    const int e = mesh_.edge_of[h];
+    std::vector<std::pair<double, int>> list;
+    for (const auto& [lambda, id] : on_edge_[e]) list.push_back({mesh_.edge_halfedge[e] == h ? lambda : 1 - lambda, id});
+    std::sort(list.begin(), list.end());
+    return list;
+  }
+  const std::vector<std::pair<Vec3, int>>& inside(int f) const { return in_face_[f]; }
+
+  int add_inside(int f, const Vec3& b) {
+    const int id = add(b[0] * mesh_.position(mesh_.F(f, 0)) + b[1] * mesh_.position(mesh_.F(f, 1)) +
+                       b[2] * mesh_.position(mesh_.F(f, 2)));
+    return id;
+  }
+
+ private:
+  int add(const Vec3& p) {
+    position.push_back(p);
+    return static_cast<int>(position.size()) - 1;
+  }
+  int on_halfedge(int h, double lambda) {
+    const int e = mesh_.edge_of[h];
+    if (mesh_.edge_halfedge[e] != h) lambda = 1 - lambda;
+    for (const auto& [existing, id] : on_edge_[e])
+      if (std::abs(existing - lambda) < kSamePoint) return id;
+    const int g = mesh_.edge_halfedge[e];
+    const int id = add((1 - lambda) * mesh_.position(mesh_.from(g)) + lambda * mesh_.position(mesh_.to(g)));
+    on_edge_[e].push_back({lambda, id});
+    return id;
+  }
+
+  const TriMesh& mesh_;
+  std::vector<std::vector<std::pair<double, int>>> on_edge_;  // #E: (lambda from edge_halfedge's origin, point)
+  std::vector<std::vector<std::pair<Vec3, int>>> in_face_;    // #F: (barycentric, point)
+};
+
+// A piece of a trace inside one face, between two points, in the trace's direction.
+struct Piece {
+  int from = -1, to = -1, edge = -1;
+};
+
+// An undirected refined edge on a trace: its T-edge and the point the trace leaves it from.
+struct ArcPiece {
+  int edge = -1, from = -1;
+};
+using PointPair = std::pair<int, int>;
+PointPair key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
+
+struct Insertion {
+  std::vector<std::vector<Piece>> pieces;                  // #F
+  std::vector<std::vector<std::pair<int, double>>> arcs;   // per point: (T-edge, fraction from its `from`)
+  std::map<PointPair, ArcPiece> arc_pieces;
+};
+
+// Every trace as points of the refined mesh, with fractions of its parametric length.
+Insertion insert_traces(const TriMesh& mesh, const TMesh& tmesh, RefinedPoints& points, Progress& progress) {
+  Insertion ins;
+  ins.pieces.resize(mesh.num_faces());
+  for (int e = 0; e < static_cast<int>(tmesh.edges.size()); ++e) {
+    if (e % 256 == 0) progress.check_cancel();
+    const std::vector<SurfacePoint>& trace = tmesh.edges[e].trace;
+    const int n = static_cast<int>(trace.size());
+    if (n < 2) fail("T-edge " + std::to_string(e) + " has no trace");
+    std::vector<int> id(n, -1);
+    std::vector<double> length(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      if (i > 0 && trace[i].face != trace[i - 1].face) {
+        id[i] = id[i - 1];
+        length[i] = length[i - 1];
+        continue;
+      }
+      id[i] = i + 1 < n && trace[i + 1].face != trace[i].face ? points.shared(trace[i], trace[i + 1].face)
+                                                              : points.of(trace[i]);
+      if (i > 0) length[i] = length[i - 1] + (trace[i].uv - trace[i - 1].uv).cwiseAbs().sum();
+    }
+    // The ends are the nodes: one point for every edge meeting there.
+    const double total = length[n - 1];
+    for (int i = 0; i < n; ++i) {
+      const double t = i == n - 1 ? 1.0 : total > 0 ? length[i] / total : 0.0;
+      if (ins.arcs.size() <= size_t(id[i])) ins.arcs.resize(id[i] + 1);
+      auto& list = ins.arcs[id[i]];
+      if (list.empty() || list.back().first != e || list.back().second != t) list.push_back({e, t});
+      if (i > 0 && trace[i].face == trace[i - 1].face && id[i] != id[i - 1])
+        ins.pieces[trace[i].face].push_back({id[i - 1], id[i], e});
+    }
+  }
+  return ins;
+}
+
+// Face f of the working mesh cut by its pieces into convex regions, each split into triangles
+// around its centroid; appends them (refined point ids) to `triangles`.
+void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
+                std::vector<int>& source_face) {
+  // Local points in the reference triangle (0,0), (1,0), (0,1) (orientation kept), and the
+  // boundary cycle corner 0, side 0, corner 1, side 1, corner 2, side 2.
+  std::vector<int> gid;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<int> side_mask;
+  std::vector<int> cycle;
+  const Eigen::Vector2d corner[3] = {{0, 0}, {1, 0}, {0, 1}};
+  for (int k = 0; k < 3; ++k) {
+    cycle.push_back(static_cast<int>(gid.size()));
+    gid.push_back(mesh.F(f, k)), xy.push_back(corner[k]), side_mask.push_back(1 << k | 1 << (k + 2) % 3);
+    for (const auto& [mu, id] : points.along(3 * f + k)) {
+      cycle.push_back(static_cast<int>(gid.size()));
+      gid.push_back(id), xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), side_mask.push_back(1 << k);
+    }
+  }
+  for (const auto& [b, id] : points.inside(f)) gid.push_back(id), xy.push_back({b[1], b[2]}), side_mask.push_back(0);
+  if (gid.size() == 3 && ins.pieces[f].empty()) {
+    triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
+    source_face.push_back(f);
+    return;
+  }
+  auto local = [&](int id) {
+    for (size_t i = 0; i < gid.size(); ++i)
+      if (gid[i] == id) return static_cast<int>(i);
+    fail("a trace point of face " + std::to_string(f) + " is not in it");
+  };
+  auto mark_arc = [&](int a, int b, int edge, int from) {
+    auto [it, added] = ins.arc_pieces.emplace(key(a, b), ArcPiece{edge, from});
+    if (!added && it->second.edge != edge)
+      fail("T-edges " + std::to_string(edge) + " and " + std::to_string(it->second.edge) + " overlap in face " + std::to_string(f));
+  };
+  const int n = static_cast<int>(gid.size());
+  std::vector<std::vector<int>> adjacent(n);
+  auto connect = [&](int a, int b) {
+    if (a == b || std::find(adjacent[a].begin(), adjacent[a].end(), b) != adjacent[a].end()) return;
+    adjacent[a].push_back(b), adjacent[b].push_back(a);
+  };
+  for (size_t i = 0; i < cycle.size(); ++i) connect(cycle[i], cycle[(i + 1) % cycle.size()]);
+  for (const Piece& p : ins.pieces[f]) {
+    const int a = local(p.from), b = local(p.to);
+    const int common = side_mask[a] & side_mask[b];
+    if (!common) {
+      connect(a, b);
+      mark_arc(p.from, p.to, p.edge, p.from);
+      continue;
+    }
+    // Along a side: every boundary step between a and b is on the trace.
+    int s = 0;
+    while (!(common >> s & 1)) ++s;
+    auto position = [&](int l) {
+      const int at = static_cast<int>(std::find(cycle.begin(), cycle.end(), l) - cycle.begin());
+      return at == 0 && s == 2 ? static_cast<int>(cycle.size()) : at;  // corner 0 ends side 2
+    };
+    const int pa = position(a), pb = position(b);
+    for (int i = std::min(pa, pb); i < std::max(pa, pb); ++i) {
+      const int u = gid[cycle[i % cycle.size()]], v = gid[cycle[(i + 1) % cycle.size()]];
+      mark_arc(u, v, p.edge, pa < pb ? u : v);
+    }
+  }
+  // Faces of the planar graph: turn to the next edge clockwise at every point.
+  for (int a = 0; a < n; ++a)
+    std::sort(adjacent[a].begin(), adjacent[a].end(), [&](int p, int q) {
+      const Eigen::Vector2d dp = xy[p] - xy[a], dq = xy[q] - xy[a];
+      return std::atan2(dp.y(), dp.x()) < std::atan2(dq.y(), dq.x());
+    });
+  std::map<PointPair, bool> used;
+  double area_sum = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b : adjacent[a]) {
+      if (used[{a, b}]) continue;
+      std::vector<int> polygon;
+      int u = a, v = b;
+      while (!used[{u, v}]) {
+        used[{u, v}] = true;
+        polygon.push_back(u);
+        const std::vector<int>& around = adjacent[v];
+        const int at = static_cast<int>(std::find(around.begin(), around.end(), u) - around.begin());
+        const int w = around[(at + around.size() - 1) % around.size()];
+        u = v, v = w;
+        if (polygon.size() > static_cast<size_t>(4 * n)) fail("face " + std::to_string(f) + " has an open region");
+      }
+      double area = 0;
+      for (size_t i = 0; i < polygon.size(); ++i) {
+        const Eigen::Vector2d& p = xy[polygon[i]];
+        const Eigen::Vector2d& q = xy[polygon[(i + 1) % polygon.size()]];
+        area += 0.5 * (p.x() * q.y() - p.y() * q.x());
+      }
+      if (area <= 0) continue;  // the outside of the triangle
+      area_sum += area;
+      if (polygon.size() == 3) {
+        triangles.push_back({gid[polygon[0]], gid[polygon[1]], gid[polygon[2]]});
+        source_face.push_back(f);
+        continue;
+      }
+      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+      for (int l : polygon) centre += xy[l];
+      centre /= static_cast<double>(polygon.size());
+      for (size_t i = 0; i < polygon.size(); ++i) {
+        const Eigen::Vector2d p = xy[polygon[i]] - centre, q = xy[polygon[(i + 1) % polygon.size()]] - centre;
+        if (!(p.x() * q.y() - p.y() * q.x() > 0))
+          fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
+      }
+      const int c = points.add_inside(f, Vec3(1 - centre.x() - centre.y(), centre.x(), centre.y()));
+      for (size_t i = 0; i < polygon.size(); ++i) {
+        triangles.push_back({gid[polygon[i]], gid[polygon[(i + 1) % polygon.size()]], c});
+        source_face.push_back(f);
+      }
+    }
+  if (std::abs(area_sum - 0.5) > 1e-9) fail("traces cross inside face " + std::to_string(f));
+}
+
+// Where each side of a cell runs in its rectangle [0,w] x [0,h], and its T-edges along it.
+struct CellFrame {
+  struct Along {
+    int edge, side;
+    int64_t offset;
+    bool forward;  // the T-edge runs counter-clockwise around the cell
+  };
+  std::vector<Along> edges;
+  int64_t width = 0, height = 0;
+  int rotation = 0;                    // into the glued uv layout
+  Eigen::Vector2d translation{0, 0};   // integer
+
+  const Along* find(int edge) const {
+    for (const Along& a : edges)
+      if (a.edge == edge) return &a;
+    return nullptr;
+  }
+  // The point at fraction t of T-edge a in the cell's rectangle.
+  Eigen::Vector2d local(const Along& a, double t, const std::vector<int64_t>& x) const {
+    static const int kDir[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+    const double start[4][2] = {{0, 0}, {double(width), 0}, {double(width), double(height)}, {0, double(height)}};
+    const double along = double(a.offset) + (a.forward ? t : 1 - t) * double(x[a.edge]);
+    return {start[a.side][0] + kDir[a.side][0] * along, start[a.side][1] + kDir[a.side][1] * along};
+  }
+  Vec2 global(const Eigen::Vector2d& p) const { return rotate_quarter(Vec2(p.x(), p.y()), rotation) + translation; }
+};
+
+std::vector<CellFrame> cell_frames(const TMesh& tmesh, const std::vector<int64_t>& x) {
+  std::vector<CellFrame> frames(tmesh.cells.size());
+  for (size_t c = 0; c < tmesh.cells.size(); ++c) {
+    const TMeshCell& cell = tmesh.cells[c];
+    if (!cell.four_sided) fail("cell " + std::to_string(c) + " is not four-sided");
+    int64_t length[4] = {0, 0, 0, 0};
+    for (int s = 0; s < 4; ++s)
+      for (int e : cell.sides[s]) {
+        const auto& cells = tmesh.edges[e].cells;
+        if (cells[0] == cells[1]) fail("cell " + std::to_string(c) + " borders itself along T-edge " + std::to_string(e));
+        frames[c].edges.push_back({e, s, length[s], cells[0] == static_cast<int>(c)});
+        length[s] += x[e];
+      }
+    if (length[0] != length[2] || length[1] != length[3])
+      fail("cell " + std::to_string(c) + " is not a rectangle (the quantization breaks its equations)");
+    frames[c].width = length[0], frames[c].height = length[1];
+  }
+  return frames;
+}
+
+// Glues the cells' rectangles along a spanning tree of the cell graph: neighbours share their
+// T-edge; the remaining T-edges are seams (quarter turn plus integer translation).
+void glue_cells(const TMesh& tmesh, const std::vector<int64_t>& x, std::vector<CellFrame>& frames) {
+  std::vector<std::vector<int>> edges_of(frames.size());
+  for (int e = 0; e < static_cast<int>(tmesh.edges.size()); ++e)
+    for (int c : tmesh.edges[e].cells)
+      if (c >= 0) edges_of[c].push_back(e);
+  std::vector<char> placed(frames.size(), 0);
+  for (size_t root = 0; root < frames.size(); ++root) {
+    if (placed[root]) continue;
+    placed[root] = 1;
+    std::queue<int> queue;
+    queue.push(static_cast<int>(root));
+    while (!queue.empty()) {
+      const int a = queue.front();
+      queue.pop();
+      for (int e : edges_of[a]) {
+        const auto& cells = tmesh.edges[e].cells;
+        const int b = cells[0] == a ? cells[1] : cells[0];
+        if (b < 0 || placed[b]) continue;
+        const CellFrame::Along* in_a = frames[a].find(e);
+        const CellFrame::Along* in_b = frames[b].find(e);
+        if (!in_a || !in_b) fail("T-edge " + std::to_string(e) + " is on no side of its cell");
+        CellFrame& fb = frames[b];
+        fb.rotation = ((frames[a].rotation + in_a->side + 2 - in_b->side) % 4 + 4) % 4;
+        const Vec2 target = frames[a].global(frames[a].local(*in_a, 0, x));
+        const Eigen::Vector2d pb = fb.local(*in_b, 0, x);
+        const Vec2 rotated = rotate_quarter(Vec2(pb.x(), pb.y()), fb.rotation);
+        fb.translation = Vec2(std::round(target.x() - rotated.x()), std::round(target.y() - rotated.y()));
+        placed[b] = 1;
+        queue.push(b);
+      }
+    }
+  }
+}
+
+// Weights of the outgoing halfedges of inner vertex v: mean-value weights (positive), or uniform
+// ones where asked or where the geometry is degenerate.
+std::vector<std::pair<int, double>> tutte_weights(const TriMesh& mesh, int v, bool uniform) {
+  const std::vector<int> out = outgoing_halfedges(mesh, v);
+  const size_t n = out.size();
+  std::vector<std::pair<int, double>> weights;
+  for (int h : out) weights.push_back({h, uniform ? 1.0 : 0.0});
+  if (uniform) return weights;
+  const Vec3 p = mesh.position(v);
+  for (size_t i = 0; i < n; ++i) {  // the angle at v between out[i] and the next one counter-clockwise
+    const Vec3 a = mesh.position(mesh.to(out[i])) - p, b = mesh.position(mesh.to(out[(i + 1) % n])) - p;
+    const double la = a.norm(), lb = b.norm(), denominator = la * lb + a.dot(b);
+    const double tan_half = a.cross(b).norm() / denominator;
+    if (!(la > 0 && lb > 0 && denominator > 0 && std::isfinite(tan_half))) return tutte_weights(mesh, v, true);
+    weights[i].second += tan_half / la;
+    weights[(i + 1) % n].second += tan_half / lb;
+  }
+  double largest = 0;
+  for (const auto& [h, w] : weights) largest = std::max(largest, w);
+  if (!(largest > 0) || !std::isfinite(largest)) return tutte_weights(mesh, v, true);
+  for (auto& [h, w] : weights) w = std::max(w, 1e-8 * largest);  // keep every edge's weight positive
+  return weights;
+}
+
+// Where zero-length T-edges collapse trace points onto one point, or inner vertices hang on one
+// side only, parts of the Tutte embedding are degenerate (segments): exactly so, but rounding
+// scatters them by 1e-16 and flips some triangles. Such inner vertices are put exactly where they
+// belong: onto the side's coordinate when every neighbour is on it (within 1e-9), or onto the
+// collapsed point when all their boundary neighbours sit there and their star is a segment.
+void snap_degenerate_stars(const TriMesh& mesh, const std::vector<int>& inner,
+                           const std::vector<Eigen::Vector2d>& boundary_uv, std::vector<Eigen::Vector2d>& at) {
+  constexpr double kTolerance = 1e-9;
+  for (int sweep = 0, changed = 1; changed && sweep < 64; ++sweep) {
+    changed = 0;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      if (inner[v] < 0) continue;
+      std::vector<Eigen::Vector2d> ring, boundary;
+      for (int h : outgoing_halfedges(mesh, v)) {
+        const bool on_boundary = inner[mesh.to(h)] < 0;
+        ring.push_back(on_boundary ? boundary_uv[TriMesh::next(h)] : at[inner[mesh.to(h)]]);
+        if (on_boundary) boundary.push_back(ring.back());
+      }
+      if (boundary.empty()) continue;
+      Eigen::Vector2d& p = at[inner[v]];
+      const Eigen::Vector2d before = p;
+      for (int a = 0; a < 2; ++a) {  // every neighbour on the coordinate line of a boundary one
+        const double line = boundary[0][a];
+        bool on_line = true;
+        for (const Eigen::Vector2d& q : ring) on_line = on_line && std::abs(q[a] - line) <= kTolerance * (1 + std::abs(line));
+        if (on_line) p[a] = line;
+      }
+      const Eigen::Vector2d c = boundary[0];
+      bool one_point = true, segment = true;
+      for (const Eigen::Vector2d& q : boundary) one_point = one_point && q == c;
+      for (const Eigen::Vector2d& q : ring) {
+        const Eigen::Vector2d d = q - c, e = p - c;
+        segment = segment && std::abs(d.x() * e.y() - d.y() * e.x()) <= kTolerance * d.norm() * e.norm();
+      }
+      if (one_point && segment) p = c;
+      changed |= p != before;
+    }
+  }
+}
+
+}  // namespace
+
+CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
+                                Progress& progress) {
+  Timer timer;
+  if (x.size() != tmesh.edges.size())
+    throw Error(ErrorCode::InvalidArgument, "fallback cell map: " + std::to_string(x.size()) + " lengths for " +
+                                                std::to_string(tmesh.edges.size()) + " T-edges");
+  std::vector<CellFrame> frames = cell_frames(tmesh, x);
+
+  // 1. Insert the traces: split every face they touch.
+  RefinedPoints points(mesh);
+  Insertion ins = insert_traces(mesh, tmesh, points, progress);
+  std::vector<std::array<int, 3>> triangles;
+  CellMap map;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (f % 1024 == 0) progress.check_cancel();
+    split_face(mesh, f, points, ins, triangles, map.source_face);
+  }
+  TriMesh& refined = map.mesh;
+  refined.V.resize(static_cast<int>(points.position.size()), 3);
+  for (size_t v = 0; v < points.position.size(); ++v) refined.V.row(static_cast<int>(v)) = points.position[v].transpose();
+  refined.F.resize(static_cast<int>(triangles.size()), 3);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) refined.F(static_cast<int>(t), k) = triangles[t][k];
+  try {
+    build_connectivity(refined);
+  } catch (const Error& e) {
+    fail(std::string("the mesh with the traces inserted is not a manifold: ") + e.what());
+  }
+  ins.arcs.resize(points.position.size());
+
+  // 2. Cells: the regions the traces bound, named by the T-edges on their boundary.
+  const int nf = refined.num_faces();
+  UnionFind<int> regions(nf);
+  for (int h = 0; h < refined.num_halfedges(); ++h) {
+    const int o = refined.opposite[h];
+    if (o >= 0 && !ins.arc_pieces.count(key(refined.from(h), refined.to(h)))) regions.unite(h / 3, o / 3);
+  }
+  std::vector<int> region_cell(nf, -1);
+  for (int h = 0; h < refined.num_halfedges(); ++h) {
+    const auto it = ins.arc_pieces.find(key(refined.from(h), refined.to(h)));
+    if (it == ins.arc_pieces.end()) continue;
+    const auto& cells = tmesh.edges[it->second.edge].cells;
+    const int cell = refined.from(h) == it->second.from ? cells[0] : cells[1];  // the face of h is on its left
+    int& assigned = region_cell[regions.find(h / 3)];
+    if (assigned >= 0 && assigned != cell)
+      fail("the traces do not separate cells " + std::to_string(assigned) + " and " + std::to_string(cell));
+    assigned = cell;
+  }
+  std::vector<int> cell_region(tmesh.cells.size(), -1);
+  map.face_cell.resize(nf);
+  for (int t = 0; t < nf; ++t) {
+    const int r = regions.find(t), cell = region_cell[r];
+    if (cell < 0) fail("a region of the surface touches no trace");
+    if (cell_region[cell] >= 0 && cell_region[cell] != r) fail("cell " + std::to_string(cell) + " falls apart into two regions");
+    cell_region[cell] = r;
+    map.face_cell[t] = cell;
+  }
+  for (size_t c = 0; c < tmesh.cells.size(); ++c)
+    if (cell_region[c] < 0) fail("cell " + std::to_string(c) + " covers no part of the surface");
+
+  // 3. Trace points on their rectangles' boundaries, per wedge (a cell can touch a node twice);
+  //    inner points by the Tutte embedding.
+  const int nv = refined.num_vertices();
+  auto closest_fractions = [&](int v, int w, int edge) {  // v's fraction on `edge` nearest w's
+    double best = -1, gap = 2;
+    for (const auto& [ev, tv] : ins.arcs[v])
+      for (const auto& [ew, tw] : ins.arcs[w])
+        if (ev == edge && ew == edge && std::abs(tv - tw) < gap) best = tv, gap = std::abs(tv - tw);
+    return best;
+  };
+  auto wedge_position = [&](int h) -> Eigen::Vector2d {  // of from(h) in the cell of face h / 3
+    const int v = refined.from(h), cell = map.face_cell[h / 3];
+    for (int g = h, step = 0; g >= 0 && step < 4096; g = refined.rotate_cw(g), ++step) {
+      const auto it = ins.arc_pieces.find(key(v, refined.to(g)));
+      if (it == ins.arc_pieces.end()) continue;
+      const CellFrame::Along* along = frames[cell].find(it->second.edge);
+      const double t = closest_fractions(v, refined.to(g), it->second.edge);
+      if (!along || t < 0) break;
+      return frames[cell].local(*along, t, x);
+    }
+    fail("a trace point of cell " + std::to_string(cell) + " lies on none of its sides");
+  };
+  std::vector<Eigen::Vector2d> local_uv(3 * static_cast<size_t>(nf));
+  std::vector<int> inner(nv, -1), vertex_cell(nv, -1);
+  int num_inner = 0;
+  for (int t = 0; t < nf; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int v = refined.F(t, k);
+      if (!ins.arcs[v].empty()) {
+        local_uv[3 * t + k] = wedge_position(3 * t + k);
+        continue;
+      }
+      if (inner[v] >= 0) continue;
+      if (refined.opposite[refined.vertex_halfedge[v]] < 0) fail("a boundary vertex lies on no trace");
+      inner[v] = num_inner++;
+      vertex_cell[v] = map.face_cell[t];
+    }
+  // Mean-value weights first; where rounding flips sliver triangles, uniform weights around them.
+  std::vector<char> uniform(nv, 0);
+  for (int round = 0; num_inner > 0; ++round) {
+    progress.check_cancel();
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_inner, 2);
+    for (int v = 0; v < nv; ++v) {
+      if (inner[v] < 0) continue;
+      const int row = inner[v];
+      double total = 0;
+      for (const auto& [h, w] : tutte_weights(refined, v, uniform[v])) {
+        const int j = refined.to(h);
+        total += w;
+        if (inner[j] >= 0)
+          entries.emplace_back(row, inner[j], -w);
+        else
+          rhs.row(row) += w * local_uv[TriMesh::next(h)].transpose();
+      }
+      entries.emplace_back(row, row, total);
+    }
+    Eigen::SparseMatrix<double> A(num_inner, num_inner);
+    A.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
+    solver.compute(A);
+    if (solver.info() != Eigen::Success) fail("the Tutte system could not be factorized");
+    const Eigen::MatrixXd solution = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !solution.allFinite()) fail("the Tutte system could not be solved");
+    std::vector<Eigen::Vector2d> at(num_inner);
+    for (int v = 0; v < nv; ++v)
+      if (inner[v] >= 0) at[inner[v]] = solution.row(inner[v]).transpose();
+    snap_degenerate_stars(refined, inner, local_uv, at);
+    for (int t = 0; t < nf; ++t)
+      for (int k = 0; k < 3; ++k)
+        if (inner[refined.F(t, k)] >= 0) local_uv[3 * t + k] = at[inner[refined.F(t, k)]];
+    int marked = 0;
+    for (int t = 0; t < nf && round < 4; ++t) {
+      const Eigen::Vector2d a = local_uv[3 * t + 1] - local_uv[3 * t], b = local_uv[3 * t + 2] - local_uv[3 * t];
+      if (!(a.x() * b.y() - a.y() * b.x() < 0)) continue;
+      for (int k = 0; k < 3; ++k)  // the flipped triangle's inner vertices and their inner neighbours
+        if (inner[refined.F(t, k)] >= 0)
+          for (int h : outgoing_halfedges(refined, refined.F(t, k)))
+            for (int v : {refined.from(h), refined.to(h)})
+              if (inner[v] >= 0 && !uniform[v]) uniform[v] = 1, ++marked;
+    }
+    if (marked == 0) break;
+  }
+
+  // 4. Corners in the glued layout; a point keeps one uv per chart it is in.
+  glue_cells(tmesh, x, frames);
+  std::vector<std::vector<Vec2>> uv_of(nv);
+  map.corner_uv.resize(3 * static_cast<size_t>(nf));
+  for (int t = 0; t < nf; ++t) {
+    const CellFrame& frame = frames[map.face_cell[t]];
+    for (int k = 0; k < 3; ++k) {
+      const int v = refined.F(t, k);
+      Vec2 uv = frame.global(local_uv[3 * t + k]);
+      for (const Vec2& seen : uv_of[v])
+        if ((seen - uv).cwiseAbs().maxCoeff() < 1e-9) uv = seen;
+      if (uv_of[v].empty() || uv_of[v].back() != uv) uv_of[v].push_back(uv);
+      map.corner_uv[3 * t + k] = uv;
+    }
+  }
+  for (int t = 0; t < nf; ++t) {
+    const Vec2 a = map.corner_uv[3 * t + 1] - map.corner_uv[3 * t], b = map.corner_uv[3 * t + 2] - map.corner_uv[3 * t];
+    const double area = a.x() * b.y() - a.y() * b.x();
+    map.stats.flipped_triangles += area < 0;
+    map.stats.degenerate_triangles += area == 0;
+    const CellFrame& frame = frames[map.face_cell[t]];
+    map.stats.collapsed_cell_triangles += area == 0 && (frame.width == 0 || frame.height == 0);
+  }
+  map.stats.vertices = nv;
+  map.stats.faces = nf;
+  map.stats.inner_vertices = num_inner;
+  map.stats.seconds = timer.seconds();
+  return map;
+}
+
+Json cell_map_stats_json(const CellMapStats& s) {
+  return {{"vertices", s.vertices},
+          {"faces", s.faces},
+          {"inner_vertices", s.inner_vertices},
+          {"flipped_triangles", s.flipped_triangles},
+          {"degenerate_triangles", s.degenerate_triangles},
+          {"collapsed_cell_triangles", s.collapsed_cell_triangles},
+          {"seconds", s.seconds}};
+}
+
+}  // namespace qgp
