@@ -304,6 +304,7 @@ int run(const CommandLine& cl) {
   try {
     session = std::make_unique<qgp::Session>(qgp::read_mesh_file(cl.input));
     qgp::RemeshOptions options = cl.options;
+    options.fallback_uv_map = !cl.uv_out.empty();
     if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
     session->set_options(options);
     qgp::Progress progress;

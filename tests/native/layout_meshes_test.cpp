@@ -9,8 +9,7 @@
 #include <iostream>
 
 #include "core/error.h"
-#include "core/parametrization.h"
-#include "igm/cell_map.h"
+#include "cell_map_checks.h"
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 #include "test_support.h"
@@ -62,73 +61,6 @@ int uncovered_wall_edges(const TriMesh& mesh, const std::vector<char>& feature_e
   return uncovered;
 }
 
-// Largest deviation of a refined edge's two sides from a quarter turn plus an integer
-// translation (the transition across it), in grid units.
-double worst_transition(const CellMap& map) {
-  double worst = 0;
-  const TriMesh& m = map.mesh;
-  for (int h = 0; h < m.num_halfedges(); ++h) {
-    const int o = m.opposite[h];
-    if (o < 0) continue;
-    const Vec2 a = map.corner_uv[h], b = map.corner_uv[TriMesh::next(h)];
-    const Vec2 a2 = map.corner_uv[TriMesh::next(o)], b2 = map.corner_uv[o];  // the same points, other side
-    double best = 1e300;
-    for (int r = 0; r < 4; ++r) {
-      const Vec2 t = a2 - rotate_quarter(a, r);
-      const double err = std::max({(rotate_quarter(b, r) + t - b2).cwiseAbs().maxCoeff(),
-                                   std::abs(t.x() - std::round(t.x())), std::abs(t.y() - std::round(t.y()))});
-      best = std::min(best, err);
-    }
-    worst = std::max(worst, best);
-  }
-  return worst;
-}
-
-// The fallback cell map (paper §7.1.1) of a valid quantization: built on every mesh and density,
-// no flipped triangle, exact transitions, nodes on integer points, the boundary on integer
-// isolines, area == quads_expected, the surface covered exactly once. Returns its stats.
-CellMapStats expect_cell_map_invariants(const std::string& where, const TriMesh& mesh, const TMesh& tm,
-                                        const QuantizationResult& q) {
-  Progress progress;
-  CellMap map;
-  try {
-    map = map_cells_to_rectangles(mesh, tm, q.x, progress);
-  } catch (const Error& e) {
-    ADD_FAILURE() << where << ": " << e.what();
-    return {};
-  }
-  const TriMesh& m = map.mesh;
-  int flipped = 0;
-  double uv_area = 0, area = 0, source_area = 0;
-  for (int t = 0; t < m.num_faces(); ++t) {
-    const Vec2 a = map.corner_uv[3 * t + 1] - map.corner_uv[3 * t], b = map.corner_uv[3 * t + 2] - map.corner_uv[3 * t];
-    const double signed_area = 0.5 * (a.x() * b.y() - a.y() * b.x());
-    flipped += signed_area < 0;
-    uv_area += signed_area;
-    area += 0.5 * m.face_normal_unnormalized(t).norm();
-    EXPECT_TRUE(map.source_face[t] >= 0 && map.source_face[t] < mesh.num_faces()) << where;
-  }
-  for (int f = 0; f < mesh.num_faces(); ++f) source_area += 0.5 * mesh.face_normal_unnormalized(f).norm();
-  EXPECT_EQ(flipped, 0) << where;
-  EXPECT_EQ(map.stats.flipped_triangles, 0) << where;
-  EXPECT_NEAR(uv_area, static_cast<double>(q.quads_expected), 1e-6 * std::max<double>(1, q.quads_expected)) << where;
-  EXPECT_NEAR(area, source_area, 1e-9 * source_area) << where;
-  EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), mesh.num_vertices() - mesh.num_edges() + mesh.num_faces())
-      << where;
-  EXPECT_LE(worst_transition(map), 1e-9) << where;
-  auto integer = [](double c) { return std::abs(c - std::round(c)) <= 1e-9; };
-  for (const TMeshNode& node : tm.nodes)  // working-mesh vertices keep their index
-    if (node.mesh_vertex >= 0)
-      for (int h : outgoing_halfedges(m, node.mesh_vertex))
-        EXPECT_TRUE(integer(map.corner_uv[h].x()) && integer(map.corner_uv[h].y())) << where << " node at vertex " << node.mesh_vertex;
-  for (int h = 0; h < m.num_halfedges(); ++h)
-    if (m.opposite[h] < 0) {
-      const Vec2 a = map.corner_uv[h], b = map.corner_uv[TriMesh::next(h)];
-      EXPECT_TRUE((a.x() == b.x() && integer(a.x())) || (a.y() == b.y() && integer(a.y()))) << where << ": boundary off an integer isoline";
-    }
-  return map.stats;
-}
-
 // Stage invariants of component c after a greedy run that reached the integer-grid map; prints
 // one table row. With walls, every feature and boundary edge must be covered by T-edges.
 void expect_invariants(const std::string& name, const Session& session, size_t c, double target, bool walls) {
@@ -171,7 +103,9 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
     EXPECT_LE(q.objective_history[i], q.objective_history[i - 1] + 1e-12) << where << " step " << i;
   EXPECT_EQ(quantization_quads(tm, q.x), q.quads_expected) << where;
   EXPECT_TRUE(check_quantization_validity(tm, q.x).valid) << where;
-  const CellMapStats cells = expect_cell_map_invariants(where, state.mesh, tm, q);
+  CellMapOptions cell_options;
+  cell_options.open_degenerate = false;  // the Tutte embedding itself (the opening: igm_test)
+  const CellMapStats cells = test::expect_cell_map_invariants(where, state.mesh, tm, q, cell_options);
   std::cout << name << " | " << c << " | " << state.field->num_singularities << " | " << tm.nodes.size() << " | "
             << tm.edges.size() << " | " << tm.cells.size() << " | " << tm.stats.trace_seconds << " | " << target
             << " | " << q.stage1_steps << " | " << q.stage2_steps << " | " << q.objective << " | " << q.zero_edges

@@ -3,6 +3,7 @@
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <queue>
 
@@ -10,6 +11,7 @@
 #include "core/parametrization.h"
 #include "core/timer.h"
 #include "core/union_find.h"
+#include "igm/untangle_map.h"
 
 namespace qgp {
 namespace {
@@ -128,6 +130,7 @@ using PointPair = std::pair<int, int>;
 PointPair key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
 
 struct Insertion {
+  std::vector<int> node_point;                             // #nodes: the refined point of each node
   std::vector<std::vector<Piece>> pieces;                  // #F
   std::vector<std::vector<std::pair<int, double>>> arcs;   // per point: (T-edge, fraction from its `from`)
   std::map<PointPair, ArcPiece> arc_pieces;
@@ -137,6 +140,7 @@ struct Insertion {
 Insertion insert_traces(const TriMesh& mesh, const TMesh& tmesh, RefinedPoints& points, Progress& progress) {
   Insertion ins;
   ins.pieces.resize(mesh.num_faces());
+  ins.node_point.assign(tmesh.nodes.size(), -1);
   for (int e = 0; e < static_cast<int>(tmesh.edges.size()); ++e) {
     if (e % 256 == 0) progress.check_cancel();
     const std::vector<SurfacePoint>& trace = tmesh.edges[e].trace;
@@ -155,6 +159,8 @@ Insertion insert_traces(const TriMesh& mesh, const TMesh& tmesh, RefinedPoints& 
       if (i > 0) length[i] = length[i - 1] + (trace[i].uv - trace[i - 1].uv).cwiseAbs().sum();
     }
     // The ends are the nodes: one point for every edge meeting there.
+    ins.node_point[tmesh.edges[e].from] = id[0];
+    ins.node_point[tmesh.edges[e].to] = id[n - 1];
     const double total = length[n - 1];
     for (int i = 0; i < n; ++i) {
       const double t = i == n - 1 ? 1.0 : total > 0 ? length[i] / total : 0.0;
@@ -430,14 +436,87 @@ void snap_degenerate_stars(const TriMesh& mesh, const std::vector<int>& inner,
   }
 }
 
+// The map made exact on the grid of 2^-bits: every vertex is rounded once, in the chart of one of
+// its corners, and carried into its other corners' charts by the transitions (quarter turn plus
+// integer translation, read off the doubles), so transitions hold exactly.
+ExactParametrization exact_map(const TriMesh& mesh, const std::vector<Vec2>& corner_uv, int bits) {
+  ExactParametrization p;
+  p.fraction_bits = bits;
+  const int nh = mesh.num_halfedges();
+  p.uv.assign(nh, IVec2{0, 0});
+  p.rotation.assign(nh, 0);
+  p.translation.assign(nh, IVec2{0, 0});
+  p.is_cut.assign(mesh.num_edges(), 0);
+  const double one = std::ldexp(1.0, bits);
+  for (int h = 0; h < nh; ++h) {  // the transition from face(h)'s chart to the opposite face's
+    const int o = mesh.opposite[h];
+    if (o < 0) continue;
+    const Vec2 a = corner_uv[h], b = corner_uv[TriMesh::next(h)];
+    const Vec2 a2 = corner_uv[TriMesh::next(o)], b2 = corner_uv[o];
+    double best = std::numeric_limits<double>::infinity();
+    for (int r = 0; r < 4; ++r) {
+      const Vec2 t = a2 - rotate_quarter(a, r);
+      const double err = (rotate_quarter(b, r) + t - b2).cwiseAbs().maxCoeff();
+      if (err < best) {
+        best = err;
+        p.rotation[h] = static_cast<int8_t>(r);
+        p.translation[h] = {std::llround(t.x()) << bits, std::llround(t.y()) << bits};
+      }
+    }
+    if (best > 1e-6) fail("a seam does not match a quarter turn and a translation");
+    if (p.rotation[h] != 0 || p.translation[h] != IVec2{0, 0}) p.is_cut[mesh.edge_of[h]] = 1;
+  }
+  std::vector<char> done(nh, 0);
+  for (int c0 = 0; c0 < nh; ++c0) {
+    if (done[c0]) continue;
+    p.uv[c0] = {std::llround(corner_uv[c0].x() * one), std::llround(corner_uv[c0].y() * one)};
+    done[c0] = 1;
+    std::vector<int> stack{c0};
+    while (!stack.empty()) {  // the other corners of the vertex, across its edges
+      const int c = stack.back();
+      stack.pop_back();
+      const int f = c / 3, k = c % 3;
+      const int out = c, in = 3 * f + (k + 2) % 3;
+      for (const int h : {out, in}) {
+        const int o = mesh.opposite[h];
+        if (o < 0) continue;
+        const int next = h == out ? 3 * (o / 3) + (o % 3 + 1) % 3 : o;
+        if (done[next]) continue;
+        p.uv[next] = p.transfer(h, p.uv[c]);
+        done[next] = 1;
+        stack.push_back(next);
+      }
+    }
+  }
+  return p;
+}
+
 }  // namespace
 
 CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
-                                Progress& progress) {
+                                Progress& progress, const CellMapOptions& options) {
   Timer timer;
   if (x.size() != tmesh.edges.size())
     throw Error(ErrorCode::InvalidArgument, "fallback cell map: " + std::to_string(x.size()) + " lengths for " +
                                                 std::to_string(tmesh.edges.size()) + " T-edges");
+  const int num_nodes = static_cast<int>(tmesh.nodes.size()), num_cells = static_cast<int>(tmesh.cells.size());
+  auto invalid = [](const std::string& what) { throw Error(ErrorCode::InvalidArgument, "fallback cell map: " + what); };
+  for (size_t e = 0; e < tmesh.edges.size(); ++e) {
+    const TMeshEdge& edge = tmesh.edges[e];
+    if (edge.from < 0 || edge.from >= num_nodes || edge.to < 0 || edge.to >= num_nodes)
+      invalid("T-edge " + std::to_string(e) + " has no valid end nodes");
+    for (int c : edge.cells)
+      if (c < -1 || c >= num_cells) invalid("T-edge " + std::to_string(e) + " borders a cell that does not exist");
+    for (const SurfacePoint& sp : edge.trace)
+      if (sp.face < 0 || sp.face >= mesh.num_faces() || !sp.barycentric.allFinite() || !sp.uv.allFinite())
+        invalid("the trace of T-edge " + std::to_string(e) + " leaves the mesh");
+  }
+  for (const TMeshCell& cell : tmesh.cells)
+    for (const auto& side : cell.sides)
+      for (int e : side)
+        if (e < 0 || e >= static_cast<int>(tmesh.edges.size())) invalid("a cell side names a T-edge that does not exist");
+  for (int64_t length : x)
+    if (length < 0) invalid("a T-edge length is negative");
   std::vector<CellFrame> frames = cell_frames(tmesh, x);
 
   // 1. Insert the traces: split every face they touch.
@@ -591,13 +670,36 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
       map.corner_uv[3 * t + k] = uv;
     }
   }
+
+  // 5. Exact, and degenerate triangles opened where single moves can.
+  map.param = exact_map(refined, map.corner_uv, options.fraction_bits);
+  if (options.open_degenerate) {
+    std::vector<char> pinned(nv, 0);
+    for (size_t n = 0; n < tmesh.nodes.size(); ++n)
+      if (tmesh.nodes[n].kind != TMeshNode::Kind::TJunction && tmesh.nodes[n].kind != TMeshNode::Kind::Crossing)
+        pinned[ins.node_point[n]] = 1;
+    std::vector<IsolineConstraint> isolines;
+    for (int h = 0; h < refined.num_halfedges(); ++h) {
+      const int o = refined.opposite[h];
+      if (o >= 0 && o < h) continue;
+      const auto it = ins.arc_pieces.find(key(refined.from(h), refined.to(h)));
+      if (it == ins.arc_pieces.end() || !tmesh.edges[it->second.edge].on_feature) continue;
+      const IVec2 &a = map.param.uv[h], &b = map.param.uv[TriMesh::next(h)];
+      if (a[0] == b[0]) isolines.push_back({h, 0});
+      else if (a[1] == b[1]) isolines.push_back({h, 1});
+    }
+    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress);
+    map.stats.degenerate_before_opening = opened.degenerate_before;
+    map.stats.opened_vertices = opened.moved_vertices;
+  }
   for (int t = 0; t < nf; ++t) {
-    const Vec2 a = map.corner_uv[3 * t + 1] - map.corner_uv[3 * t], b = map.corner_uv[3 * t + 2] - map.corner_uv[3 * t];
-    const double area = a.x() * b.y() - a.y() * b.x();
-    map.stats.flipped_triangles += area < 0;
-    map.stats.degenerate_triangles += area == 0;
+    for (int k = 0; k < 3; ++k)
+      map.corner_uv[3 * t + k] = Vec2(map.param.to_double(map.param.uv[3 * t + k][0]), map.param.to_double(map.param.uv[3 * t + k][1]));
+    const int sign = orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]);
+    map.stats.flipped_triangles += sign < 0;
+    map.stats.degenerate_triangles += sign == 0;
     const CellFrame& frame = frames[map.face_cell[t]];
-    map.stats.collapsed_cell_triangles += area == 0 && (frame.width == 0 || frame.height == 0);
+    map.stats.collapsed_cell_triangles += sign == 0 && (frame.width == 0 || frame.height == 0);
   }
   map.stats.vertices = nv;
   map.stats.faces = nf;
@@ -613,6 +715,8 @@ Json cell_map_stats_json(const CellMapStats& s) {
           {"flipped_triangles", s.flipped_triangles},
           {"degenerate_triangles", s.degenerate_triangles},
           {"collapsed_cell_triangles", s.collapsed_cell_triangles},
+          {"degenerate_before_opening", s.degenerate_before_opening},
+          {"opened_vertices", s.opened_vertices},
           {"seconds", s.seconds}};
 }
 

@@ -12,6 +12,7 @@
 
 #include "core/json.h"
 #include "core/mesh.h"
+#include "core/parametrization.h"
 #include "core/progress.h"
 #include "tmesh/tmesh.h"
 
@@ -20,6 +21,8 @@ namespace qgp {
 struct CellMapStats {
   int vertices = 0, faces = 0;     // of the refined mesh
   int inner_vertices = 0;          // placed by the Tutte embedding
+  int degenerate_before_opening = 0;  // degenerate triangles of the Tutte embedding
+  int opened_vertices = 0;            // moved by the opening step
   int flipped_triangles = 0;       // signed uv area < 0 (floating point)
   int degenerate_triangles = 0;    // signed uv area == 0 (collapsed cells, chords along a side)
   int collapsed_cell_triangles = 0;  // of them, in cells of zero width or height
@@ -28,10 +31,19 @@ struct CellMapStats {
 
 struct CellMap {
   TriMesh mesh;                    // the working mesh with the traces inserted (connectivity built)
+  ExactParametrization param;      // the map, exact (fraction_bits of CellMapOptions)
   std::vector<int> source_face;    // #F: the working-mesh face each triangle lies in
   std::vector<int> face_cell;      // #F: the T-mesh cell each triangle lies in
-  std::vector<Vec2> corner_uv;     // 3#F: integer-grid coordinates of the corners
+  std::vector<Vec2> corner_uv;     // 3#F: integer-grid coordinates of the corners (param as doubles)
   CellMapStats stats;
+};
+
+struct CellMapOptions {
+  int fraction_bits = 20;
+  // Degenerate triangles (collapsed cells, chords) are opened where moving a vertex can do it
+  // without flipping anything: igm/untangle_map, with singular and feature-corner nodes pinned and
+  // feature and boundary traces kept on their integer isolines.
+  bool open_degenerate = true;
 };
 
 // mesh: the working mesh the T-mesh was traced on; tmesh: its T-mesh (four-sided cells, traces);
@@ -40,7 +52,7 @@ struct CellMap {
 // the surface into the T-mesh's cells (inconsistent traces, a cell bordering itself),
 // Error(InvalidArgument) on mismatched sizes, Error(Cancelled) on cancel.
 CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
-                                Progress& progress);
+                                Progress& progress, const CellMapOptions& options = {});
 
 Json cell_map_stats_json(const CellMapStats& stats);
 

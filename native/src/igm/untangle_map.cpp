@@ -217,6 +217,21 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
     return false;
   };
 
+  // A vertex whose move failed fails again until something within two rings of it moves (its
+  // triangles and its neighbours' angle sums are all the move looks at): it is skipped till then.
+  std::vector<char> dirty(nv, 1);
+  auto try_improve = [&](int v) {
+    if (!dirty[v]) return false;
+    if (!improve(v)) {
+      dirty[v] = 0;
+      return false;
+    }
+    for (int c : corners[v])
+      for (int j = 0; j < 3; ++j)
+        for (int c2 : corners[mesh.F(c / 3, j)])
+          for (int i = 0; i < 3; ++i) dirty[mesh.F(c2 / 3, i)] = 1;
+    return true;
+  };
   // Rounds of single-vertex moves over growing regions; `allowed` vertices only. Moves are never
   // undone: the counts after the last round are the result's.
   auto run_rounds = [&](const std::vector<char>& allowed) {
@@ -240,7 +255,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
       for (int sweep = 0; sweep < 30; ++sweep) {
         progress.check_cancel();
         bool any = false;
-        for (int v : movable) any = improve(v) || any;
+        for (int v : movable) any = try_improve(v) || any;
         if (!any) break;
       }
       count_bad(&stats.flipped_after, &stats.degenerate_after);
@@ -268,6 +283,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
     const std::vector<char> first_moved = moved;
     param = start;
     std::fill(moved.begin(), moved.end(), 0);
+    std::fill(dirty.begin(), dirty.end(), 1);
     count_bad(&stats.flipped_after, &stats.degenerate_after);
     run_rounds(simple);
     run_rounds(movable);

@@ -15,6 +15,9 @@ struct RemeshOptions {
   std::vector<std::array<int, 2>> feature_edges;  // input vertex index pairs (marked sharp)
   Quantizer quantizer = Quantizer::Greedy;
   bool drop_bad_components = false;  // drop non-manifold / non-orientable parts instead of refusing
+  // Where the integer-grid map stays flipped, also build the fallback cell map on the mesh with the
+  // T-mesh inserted (igm/cell_map; for maps written as files, qgp --uv-out).
+  bool fallback_uv_map = false;
 
   static constexpr double kDefaultTargetFaces = 2000;
 };

@@ -477,8 +477,10 @@ void Session::run_igm_stage(Job job, Progress& progress) {
         s.seconds += u.seconds;
         s.winding_defects = count_exact_winding_defects(state.mesh, *state.igm, cone_quarter_turns(state.mesh, *state.field));
       }
-      run_cell_map(state, progress);
+      state.cell_map.reset();
+      state.cell_map_report = Json();
     }
+    if (options_.fallback_uv_map && state.cell_map_report.is_null()) run_cell_map(state, progress);
     const IgmStats& s = state.igm_stats;
     flipped += s.flipped_triangles;
     degenerate += s.degenerate_triangles;
@@ -499,8 +501,6 @@ void Session::run_igm_stage(Job job, Progress& progress) {
 }
 
 void Session::run_cell_map(ComponentState& state, Progress& progress) {
-  state.cell_map.reset();
-  state.cell_map_report = Json();
   // Degenerate triangles alone do not call for it: its collapsed cells have many more.
   const IgmStats& s = state.igm_stats;
   if (s.flipped_triangles + s.winding_defects == 0) return;
