@@ -460,7 +460,7 @@ ExactParametrization exact_map(const TriMesh& mesh, const std::vector<Vec2>& cor
       if (err < best) {
         best = err;
         p.rotation[h] = static_cast<int8_t>(r);
-        p.translation[h] = {std::llround(t.x()) << bits, std::llround(t.y()) << bits};
+        p.translation[h] = {std::llround(t.x()) * p.one(), std::llround(t.y()) * p.one()};
       }
     }
     if (best > 1e-6) fail("a seam does not match a quarter turn and a translation");
@@ -688,8 +688,9 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
       if (a[0] == b[0]) isolines.push_back({h, 0});
       else if (a[1] == b[1]) isolines.push_back({h, 1});
     }
-    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress);
+    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress, 3, true);
     map.stats.degenerate_before_opening = opened.degenerate_before;
+    map.stats.flipped_before_opening = opened.flipped_before;
     map.stats.opened_vertices = opened.moved_vertices;
   }
   for (int t = 0; t < nf; ++t) {
@@ -716,6 +717,7 @@ Json cell_map_stats_json(const CellMapStats& s) {
           {"degenerate_triangles", s.degenerate_triangles},
           {"collapsed_cell_triangles", s.collapsed_cell_triangles},
           {"degenerate_before_opening", s.degenerate_before_opening},
+          {"flipped_before_opening", s.flipped_before_opening},
           {"opened_vertices", s.opened_vertices},
           {"seconds", s.seconds}};
 }

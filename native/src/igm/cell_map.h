@@ -21,7 +21,8 @@ namespace qgp {
 struct CellMapStats {
   int vertices = 0, faces = 0;     // of the refined mesh
   int inner_vertices = 0;          // placed by the Tutte embedding
-  int degenerate_before_opening = 0;  // degenerate triangles of the Tutte embedding
+  int degenerate_before_opening = 0;  // degenerate triangles of the Tutte embedding (made exact)
+  int flipped_before_opening = 0;     // flipped by rounding onto the exact grid
   int opened_vertices = 0;            // moved by the opening step
   int flipped_triangles = 0;       // signed uv area < 0 (floating point)
   int degenerate_triangles = 0;    // signed uv area == 0 (collapsed cells, chords along a side)

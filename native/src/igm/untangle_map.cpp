@@ -18,6 +18,7 @@ __int128 doubled_area(const IVec2& a, const IVec2& b, const IVec2& c) {
 
 // Fewer non-positive triangles, then a larger smallest doubled area, is better.
 struct RingKey {
+  int flipped = 0;
   int bad = 0;
   __int128 smallest = 0;
   bool better_than(const RingKey& o) const { return bad < o.bad || (bad == o.bad && smallest > o.smallest); }
@@ -61,7 +62,7 @@ bool corner_turns(const TriMesh& mesh, const ExactParametrization& param, const 
 
 MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinned,
                               const std::vector<IsolineConstraint>& isolines, ExactParametrization& param,
-                              Progress& progress, int max_rings) {
+                              Progress& progress, int max_rings, bool never_flip) {
   Timer timer;
   MapUntangleStats stats;
   const int nv = mesh.num_vertices(), nf = mesh.num_faces();
@@ -129,6 +130,7 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
       const int f = c / 3, k = c % 3;
       const __int128 area = doubled_area(moved_corner(c, d), param.uv[3 * f + (k + 1) % 3], param.uv[3 * f + (k + 2) % 3]);
       key.bad += area <= 0;
+      key.flipped += area < 0;
       if (first || area < key.smallest) key.smallest = area;
       first = false;
     }
@@ -201,7 +203,9 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
     for (double step = 1; step > 0.1; step *= 0.5) {
       const IVec2 move{static_cast<int64_t>(std::llround(step * d.x() * scale)),
                        static_cast<int64_t>(std::llround(step * d.y() * scale))};
-      if (move == IVec2{0, 0} || !ring_key(v, move).better_than(now)) continue;
+      if (move == IVec2{0, 0}) continue;
+      const RingKey after = ring_key(v, move);
+      if (!after.better_than(now) || (never_flip && after.flipped > now.flipped)) continue;
       for (int c : corners[v]) param.uv[c] = moved_corner(c, move);
       bool cones_kept = true;
       for (size_t i = 0; i < ring.size() && cones_kept; ++i) {

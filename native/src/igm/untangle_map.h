@@ -30,9 +30,10 @@ struct MapUntangleStats {
 // mesh: the component (connectivity built); pinned: #V flags of vertices that keep their uv (may be
 // empty; interior vertices whose transitions add up to a rotation are always pinned); isolines:
 // edges whose corners keep sharing the coordinate `axis` (a vertex on two isolines of different
-// direction stays); param: 3#F corners.
+// direction stays); param: 3#F corners. never_flip: a move may not flip more of the vertex's
+// triangles than before (for opening degenerate triangles of a flip-free map).
 MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinned,
                               const std::vector<IsolineConstraint>& isolines, ExactParametrization& param,
-                              Progress& progress, int max_rings = 3);
+                              Progress& progress, int max_rings = 3, bool never_flip = false);
 
 }  // namespace qgp
