@@ -14,7 +14,8 @@
 
 namespace qgp::test {
 
-// Builds the cell map and expects: no flipped triangle (exact), every transition exact (each corner
+// Builds the cell map and expects: no flipped triangle (exact), no wound ring (with cone angles
+// in the options), every transition exact (each corner
 // is the other side's carried across by the edge's quarter turn and integer translation, and the
 // doubles agree with it), T-mesh nodes at working-mesh vertices on integer points where they are
 // singular, feature corners or boundary nodes, every boundary edge on an integer isoline, the
@@ -52,6 +53,7 @@ inline CellMapStats expect_cell_map_invariants(const std::string& where, const T
   for (int f = 0; f < mesh.num_faces(); ++f) source_area += 0.5 * mesh.face_normal_unnormalized(f).norm();
   EXPECT_EQ(flipped, 0) << where;
   EXPECT_EQ(map.stats.flipped_triangles, 0) << where;
+  EXPECT_EQ(map.stats.wound_vertices, 0) << where << ": rings wound other than their cone";
   EXPECT_EQ(mismatched, 0) << where << ": transitions not exact";
   EXPECT_EQ(off_grid, 0) << where << ": translations off the integers";
   EXPECT_TRUE(doubled_area == static_cast<__int128>(2 * q.quads_expected) * p.one() * p.one())

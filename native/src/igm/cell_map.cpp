@@ -673,6 +673,14 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
 
   // 5. Exact, and degenerate triangles opened where single moves can.
   map.param = exact_map(refined, map.corner_uv, options.fraction_bits);
+  std::vector<int> cone_turns;
+  if (!options.cone_turns.empty()) {
+    if (static_cast<int>(options.cone_turns.size()) != mesh.num_vertices())
+      throw Error(ErrorCode::InvalidArgument, "fallback cell map: the cone angles do not match the mesh");
+    cone_turns = options.cone_turns;
+    for (int v = mesh.num_vertices(); v < nv; ++v)
+      cone_turns.push_back(refined.opposite[refined.vertex_halfedge[v]] < 0 ? 2 : 4);
+  }
   if (options.open_degenerate) {
     std::vector<char> pinned(nv, 0);
     for (size_t n = 0; n < tmesh.nodes.size(); ++n)
@@ -688,7 +696,10 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
       if (a[0] == b[0]) isolines.push_back({h, 0});
       else if (a[1] == b[1]) isolines.push_back({h, 1});
     }
-    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress, 3, true);
+    MapUntangleOptions untangle;
+    untangle.never_flip = true;
+    untangle.cone_turns = cone_turns;
+    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress, untangle);
     map.stats.degenerate_before_opening = opened.degenerate_before;
     map.stats.flipped_before_opening = opened.flipped_before;
     map.stats.opened_vertices = opened.moved_vertices;
@@ -701,6 +712,14 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
     map.stats.degenerate_triangles += sign == 0;
     const CellFrame& frame = frames[map.face_cell[t]];
     map.stats.collapsed_cell_triangles += sign == 0 && (frame.width == 0 || frame.height == 0);
+  }
+  if (!cone_turns.empty()) {  // rings wound other than their cone where every triangle is positive
+    const std::vector<int> turns = exact_angle_sums(refined, map.param);
+    std::vector<char> positive(nv, 1);
+    for (int t = 0; t < nf; ++t)
+      if (orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]) <= 0)
+        for (int k = 0; k < 3; ++k) positive[refined.F(t, k)] = 0;
+    for (int v = 0; v < nv; ++v) map.stats.wound_vertices += positive[v] && turns[v] != cone_turns[v];
   }
   map.stats.vertices = nv;
   map.stats.faces = nf;
@@ -719,6 +738,7 @@ Json cell_map_stats_json(const CellMapStats& s) {
           {"degenerate_before_opening", s.degenerate_before_opening},
           {"flipped_before_opening", s.flipped_before_opening},
           {"opened_vertices", s.opened_vertices},
+          {"wound_vertices", s.wound_vertices},
           {"seconds", s.seconds}};
 }
 

@@ -24,6 +24,7 @@ struct CellMapStats {
   int degenerate_before_opening = 0;  // degenerate triangles of the Tutte embedding (made exact)
   int flipped_before_opening = 0;     // flipped by rounding onto the exact grid
   int opened_vertices = 0;            // moved by the opening step
+  int wound_vertices = 0;             // all triangles positive, angle sum not the cone's (0 expected)
   int flipped_triangles = 0;       // signed uv area < 0 (floating point)
   int degenerate_triangles = 0;    // signed uv area == 0 (collapsed cells, chords along a side)
   int collapsed_cell_triangles = 0;  // of them, in cells of zero width or height
@@ -45,6 +46,10 @@ struct CellMapOptions {
   // without flipping anything: igm/untangle_map, with singular and feature-corner nodes pinned and
   // feature and boundary traces kept on their integer isolines.
   bool open_degenerate = true;
+  // #V of the working mesh: each vertex's cone angle in quarter turns (the cross field's
+  // cone_quarter_turns), or empty. Inserted points are regular (4 inside, 2 on the boundary). With
+  // them, the opening winds no ring twice and wound_vertices is counted.
+  std::vector<int> cone_turns;
 };
 
 // mesh: the working mesh the T-mesh was traced on; tmesh: its T-mesh (four-sided cells, traces);

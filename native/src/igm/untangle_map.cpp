@@ -62,12 +62,15 @@ bool corner_turns(const TriMesh& mesh, const ExactParametrization& param, const 
 
 MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinned,
                               const std::vector<IsolineConstraint>& isolines, ExactParametrization& param,
-                              Progress& progress, int max_rings, bool never_flip) {
+                              Progress& progress, const MapUntangleOptions& options) {
+  const int max_rings = options.max_rings;
   Timer timer;
   MapUntangleStats stats;
   const int nv = mesh.num_vertices(), nf = mesh.num_faces();
   if (static_cast<int>(param.uv.size()) != 3 * nf || static_cast<int>(param.rotation.size()) != 3 * nf)
     throw Error(ErrorCode::Internal, "map untangle: the map does not match the mesh");
+  if (!options.cone_turns.empty() && static_cast<int>(options.cone_turns.size()) != nv)
+    throw Error(ErrorCode::Internal, "map untangle: the cone angles do not match the mesh");
   if (!pinned.empty() && static_cast<int>(pinned.size()) != nv)
     throw Error(ErrorCode::Internal, "map untangle: the pinned vertices do not match the mesh");
   for (const IsolineConstraint& c : isolines)
@@ -158,6 +161,12 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
     for (int c : corners[u]) sum += exact_corner_angle(param, c);
     return static_cast<int>(std::lround(sum / (M_PI / 2)));
   };
+  auto ring_positive = [&](int u) {
+    for (int c : corners[u])
+      if (orient2d_exact(param.uv[c], param.uv[3 * (c / 3) + (c % 3 + 1) % 3], param.uv[3 * (c / 3) + (c % 3 + 2) % 3]) <= 0)
+        return false;
+    return true;
+  };
   std::vector<double> c_terms, g_line;
   std::vector<Vec2> g_terms;
   std::vector<IVec2> old_uv;
@@ -205,12 +214,13 @@ MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinn
                        static_cast<int64_t>(std::llround(step * d.y() * scale))};
       if (move == IVec2{0, 0}) continue;
       const RingKey after = ring_key(v, move);
-      if (!after.better_than(now) || (never_flip && after.flipped > now.flipped)) continue;
+      if (!after.better_than(now) || (options.never_flip && after.flipped > now.flipped)) continue;
       for (int c : corners[v]) param.uv[c] = moved_corner(c, move);
       bool cones_kept = true;
       for (size_t i = 0; i < ring.size() && cones_kept; ++i) {
         const int turns = quarter_turns(ring[i]);
         cones_kept = turns == turns_now[i] || injective_sum(ring[i], turns);
+        if (!options.cone_turns.empty() && turns != options.cone_turns[ring[i]] && ring_positive(ring[i])) cones_kept = false;
       }
       if (cones_kept) {
         moved[v] = 1;

@@ -30,10 +30,18 @@ struct MapUntangleStats {
 // mesh: the component (connectivity built); pinned: #V flags of vertices that keep their uv (may be
 // empty; interior vertices whose transitions add up to a rotation are always pinned); isolines:
 // edges whose corners keep sharing the coordinate `axis` (a vertex on two isolines of different
-// direction stays); param: 3#F corners. never_flip: a move may not flip more of the vertex's
-// triangles than before (for opening degenerate triangles of a flip-free map).
+// direction stays); param: 3#F corners.
+struct MapUntangleOptions {
+  int max_rings = 3;
+  // For opening degenerate triangles of a flip-free map: a move may not flip more of the vertex's
+  // triangles than before...
+  bool never_flip = false;
+  // ...nor, where given (#V quarter turns), leave an interior vertex whose triangles are all
+  // positive with an angle sum other than its cone's (a ring wound twice).
+  std::vector<int> cone_turns;
+};
 MapUntangleStats untangle_map(const TriMesh& mesh, const std::vector<char>& pinned,
                               const std::vector<IsolineConstraint>& isolines, ExactParametrization& param,
-                              Progress& progress, int max_rings = 3, bool never_flip = false);
+                              Progress& progress, const MapUntangleOptions& options = {});
 
 }  // namespace qgp

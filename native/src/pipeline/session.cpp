@@ -505,9 +505,11 @@ void Session::run_cell_map(ComponentState& state, Progress& progress) {
   const IgmStats& s = state.igm_stats;
   if (s.flipped_triangles + s.winding_defects == 0) return;
   try {
-    CellMap map = map_cells_to_rectangles(state.mesh, *state.tmesh, state.quantization->x, progress);
+    CellMapOptions options;
+    options.cone_turns = cone_quarter_turns(state.mesh, *state.field);
+    CellMap map = map_cells_to_rectangles(state.mesh, *state.tmesh, state.quantization->x, progress, options);
     state.cell_map_report = cell_map_stats_json(map.stats);
-    const bool used = map.stats.flipped_triangles == 0;
+    const bool used = map.stats.flipped_triangles + map.stats.wound_vertices == 0;
     state.cell_map_report["used"] = used;
     if (used) state.cell_map = std::move(map);
   } catch (const Error& e) {
