@@ -681,7 +681,11 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
     for (int v = mesh.num_vertices(); v < nv; ++v)
       cone_turns.push_back(refined.opposite[refined.vertex_halfedge[v]] < 0 ? 2 : 4);
   }
-  if (options.open_degenerate) {
+  // Rounding can flip a sliver: the same moves unfold it (also when no opening was asked for).
+  int rounding_flips = 0;
+  for (int t = 0; t < nf; ++t)
+    rounding_flips += orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]) < 0;
+  if (options.open_degenerate || rounding_flips > 0) {
     std::vector<char> pinned(nv, 0);
     for (size_t n = 0; n < tmesh.nodes.size(); ++n)
       if (tmesh.nodes[n].kind != TMeshNode::Kind::TJunction && tmesh.nodes[n].kind != TMeshNode::Kind::Crossing)

@@ -44,7 +44,8 @@ struct CellMapOptions {
   int fraction_bits = 20;
   // Degenerate triangles (collapsed cells, chords) are opened where moving a vertex can do it
   // without flipping anything: igm/untangle_map, with singular and feature-corner nodes pinned and
-  // feature and boundary traces kept on their integer isolines.
+  // feature and boundary traces kept on their integer isolines. The same step always runs where
+  // rounding onto the exact grid flipped a sliver.
   bool open_degenerate = true;
   // #V of the working mesh: each vertex's cone angle in quarter turns (the cross field's
   // cone_quarter_turns), or empty. Inserted points are regular (4 inside, 2 on the boundary). With
