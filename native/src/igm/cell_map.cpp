@@ -51,8 +51,7 @@ class RefinedPoints {
     }
     for (const auto& [existing, id] : in_face_[f])
       if ((existing - b).cwiseAbs().maxCoeff() < kSamePoint) return id;
-    const int id = add(b[0] * mesh_.position(mesh_.F(f, 0)) + b[1] * mesh_.position(mesh_.F(f, 1)) +
-                       b[2] * mesh_.position(mesh_.F(f, 2)));
+    const int id = add_inside(f, b);
     in_face_[f].push_back({b, id});
     return id;
   }
@@ -90,10 +89,10 @@ class RefinedPoints {
   }
   const std::vector<std::pair<Vec3, int>>& inside(int f) const { return in_face_[f]; }
 
+  // A new point inside face f at barycentric b (not looked up later: region centres).
   int add_inside(int f, const Vec3& b) {
-    const int id = add(b[0] * mesh_.position(mesh_.F(f, 0)) + b[1] * mesh_.position(mesh_.F(f, 1)) +
-                       b[2] * mesh_.position(mesh_.F(f, 2)));
-    return id;
+    return add(b[0] * mesh_.position(mesh_.F(f, 0)) + b[1] * mesh_.position(mesh_.F(f, 1)) +
+               b[2] * mesh_.position(mesh_.F(f, 2)));
   }
 
  private:
@@ -181,10 +180,10 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
   // Local points in the reference triangle (0,0), (1,0), (0,1) (orientation kept), and the
   // boundary cycle corner 0, side 0, corner 1, side 1, corner 2, side 2.
   std::vector<int> gid;
-  std::vector<Eigen::Vector2d> xy;
+  std::vector<Vec2> xy;
   std::vector<int> side_mask;
   std::vector<int> cycle;
-  const Eigen::Vector2d corner[3] = {{0, 0}, {1, 0}, {0, 1}};
+  const Vec2 corner[3] = {{0, 0}, {1, 0}, {0, 1}};
   for (int k = 0; k < 3; ++k) {
     cycle.push_back(static_cast<int>(gid.size()));
     gid.push_back(mesh.F(f, k)), xy.push_back(corner[k]), side_mask.push_back(1 << k | 1 << (k + 2) % 3);
@@ -240,7 +239,7 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
   // Faces of the planar graph: turn to the next edge clockwise at every point.
   for (int a = 0; a < n; ++a)
     std::sort(adjacent[a].begin(), adjacent[a].end(), [&](int p, int q) {
-      const Eigen::Vector2d dp = xy[p] - xy[a], dq = xy[q] - xy[a];
+      const Vec2 dp = xy[p] - xy[a], dq = xy[q] - xy[a];
       return std::atan2(dp.y(), dp.x()) < std::atan2(dq.y(), dq.x());
     });
   std::map<PointPair, bool> used;
@@ -261,8 +260,8 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
       }
       double area = 0;
       for (size_t i = 0; i < polygon.size(); ++i) {
-        const Eigen::Vector2d& p = xy[polygon[i]];
-        const Eigen::Vector2d& q = xy[polygon[(i + 1) % polygon.size()]];
+        const Vec2& p = xy[polygon[i]];
+        const Vec2& q = xy[polygon[(i + 1) % polygon.size()]];
         area += 0.5 * (p.x() * q.y() - p.y() * q.x());
       }
       if (area <= 0) continue;  // the outside of the triangle
@@ -272,11 +271,11 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
         source_face.push_back(f);
         continue;
       }
-      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+      Vec2 centre = Vec2::Zero();
       for (int l : polygon) centre += xy[l];
       centre /= static_cast<double>(polygon.size());
       for (size_t i = 0; i < polygon.size(); ++i) {
-        const Eigen::Vector2d p = xy[polygon[i]] - centre, q = xy[polygon[(i + 1) % polygon.size()]] - centre;
+        const Vec2 p = xy[polygon[i]] - centre, q = xy[polygon[(i + 1) % polygon.size()]] - centre;
         if (!(p.x() * q.y() - p.y() * q.x() > 0))
           fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
       }
@@ -299,7 +298,7 @@ struct CellFrame {
   std::vector<Along> edges;
   int64_t width = 0, height = 0;
   int rotation = 0;                    // into the glued uv layout
-  Eigen::Vector2d translation{0, 0};   // integer
+  Vec2 translation{0, 0};   // integer
 
   const Along* find(int edge) const {
     for (const Along& a : edges)
@@ -307,13 +306,13 @@ struct CellFrame {
     return nullptr;
   }
   // The point at fraction t of T-edge a in the cell's rectangle.
-  Eigen::Vector2d local(const Along& a, double t, const std::vector<int64_t>& x) const {
+  Vec2 local(const Along& a, double t, const std::vector<int64_t>& x) const {
     static const int kDir[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
     const double start[4][2] = {{0, 0}, {double(width), 0}, {double(width), double(height)}, {0, double(height)}};
     const double along = double(a.offset) + (a.forward ? t : 1 - t) * double(x[a.edge]);
     return {start[a.side][0] + kDir[a.side][0] * along, start[a.side][1] + kDir[a.side][1] * along};
   }
-  Vec2 global(const Eigen::Vector2d& p) const { return rotate_quarter(Vec2(p.x(), p.y()), rotation) + translation; }
+  Vec2 global(const Vec2& p) const { return rotate_quarter(p, rotation) + translation; }
 };
 
 std::vector<CellFrame> cell_frames(const TMesh& tmesh, const std::vector<int64_t>& x) {
@@ -362,8 +361,8 @@ void glue_cells(const TMesh& tmesh, const std::vector<int64_t>& x, std::vector<C
         CellFrame& fb = frames[b];
         fb.rotation = ((frames[a].rotation + in_a->side + 2 - in_b->side) % 4 + 4) % 4;
         const Vec2 target = frames[a].global(frames[a].local(*in_a, 0, x));
-        const Eigen::Vector2d pb = fb.local(*in_b, 0, x);
-        const Vec2 rotated = rotate_quarter(Vec2(pb.x(), pb.y()), fb.rotation);
+        const Vec2 pb = fb.local(*in_b, 0, x);
+        const Vec2 rotated = rotate_quarter(pb, fb.rotation);
         fb.translation = Vec2(std::round(target.x() - rotated.x()), std::round(target.y() - rotated.y()));
         placed[b] = 1;
         queue.push(b);
@@ -402,32 +401,32 @@ std::vector<std::pair<int, double>> tutte_weights(const TriMesh& mesh, int v, bo
 // belong: onto the side's coordinate when every neighbour is on it (within 1e-9), or onto the
 // collapsed point when all their boundary neighbours sit there and their star is a segment.
 void snap_degenerate_stars(const TriMesh& mesh, const std::vector<int>& inner,
-                           const std::vector<Eigen::Vector2d>& boundary_uv, std::vector<Eigen::Vector2d>& at) {
+                           const std::vector<Vec2>& boundary_uv, std::vector<Vec2>& at) {
   constexpr double kTolerance = 1e-9;
   for (int sweep = 0, changed = 1; changed && sweep < 64; ++sweep) {
     changed = 0;
     for (int v = 0; v < mesh.num_vertices(); ++v) {
       if (inner[v] < 0) continue;
-      std::vector<Eigen::Vector2d> ring, boundary;
+      std::vector<Vec2> ring, boundary;
       for (int h : outgoing_halfedges(mesh, v)) {
         const bool on_boundary = inner[mesh.to(h)] < 0;
         ring.push_back(on_boundary ? boundary_uv[TriMesh::next(h)] : at[inner[mesh.to(h)]]);
         if (on_boundary) boundary.push_back(ring.back());
       }
       if (boundary.empty()) continue;
-      Eigen::Vector2d& p = at[inner[v]];
-      const Eigen::Vector2d before = p;
+      Vec2& p = at[inner[v]];
+      const Vec2 before = p;
       for (int a = 0; a < 2; ++a) {  // every neighbour on the coordinate line of a boundary one
         const double line = boundary[0][a];
         bool on_line = true;
-        for (const Eigen::Vector2d& q : ring) on_line = on_line && std::abs(q[a] - line) <= kTolerance * (1 + std::abs(line));
+        for (const Vec2& q : ring) on_line = on_line && std::abs(q[a] - line) <= kTolerance * (1 + std::abs(line));
         if (on_line) p[a] = line;
       }
-      const Eigen::Vector2d c = boundary[0];
+      const Vec2 c = boundary[0];
       bool one_point = true, segment = true;
-      for (const Eigen::Vector2d& q : boundary) one_point = one_point && q == c;
-      for (const Eigen::Vector2d& q : ring) {
-        const Eigen::Vector2d d = q - c, e = p - c;
+      for (const Vec2& q : boundary) one_point = one_point && q == c;
+      for (const Vec2& q : ring) {
+        const Vec2 d = q - c, e = p - c;
         segment = segment && std::abs(d.x() * e.y() - d.y() * e.x()) <= kTolerance * d.norm() * e.norm();
       }
       if (one_point && segment) p = c;
@@ -581,7 +580,7 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
         if (ev == edge && ew == edge && std::abs(tv - tw) < gap) best = tv, gap = std::abs(tv - tw);
     return best;
   };
-  auto wedge_position = [&](int h) -> Eigen::Vector2d {  // of from(h) in the cell of face h / 3
+  auto wedge_position = [&](int h) -> Vec2 {  // of from(h) in the cell of face h / 3
     const int v = refined.from(h), cell = map.face_cell[h / 3];
     for (int g = h, step = 0; g >= 0 && step < 4096; g = refined.rotate_cw(g), ++step) {
       const auto it = ins.arc_pieces.find(key(v, refined.to(g)));
@@ -593,7 +592,7 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
     }
     fail("a trace point of cell " + std::to_string(cell) + " lies on none of its sides");
   };
-  std::vector<Eigen::Vector2d> local_uv(3 * static_cast<size_t>(nf));
+  std::vector<Vec2> local_uv(3 * static_cast<size_t>(nf));
   std::vector<int> inner(nv, -1), vertex_cell(nv, -1);
   int num_inner = 0;
   for (int t = 0; t < nf; ++t)
@@ -635,7 +634,7 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
     if (solver.info() != Eigen::Success) fail("the Tutte system could not be factorized");
     const Eigen::MatrixXd solution = solver.solve(rhs);
     if (solver.info() != Eigen::Success || !solution.allFinite()) fail("the Tutte system could not be solved");
-    std::vector<Eigen::Vector2d> at(num_inner);
+    std::vector<Vec2> at(num_inner);
     for (int v = 0; v < nv; ++v)
       if (inner[v] >= 0) at[inner[v]] = solution.row(inner[v]).transpose();
     snap_degenerate_stars(refined, inner, local_uv, at);
@@ -644,7 +643,7 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
         if (inner[refined.F(t, k)] >= 0) local_uv[3 * t + k] = at[inner[refined.F(t, k)]];
     int marked = 0;
     for (int t = 0; t < nf && round < 4; ++t) {
-      const Eigen::Vector2d a = local_uv[3 * t + 1] - local_uv[3 * t], b = local_uv[3 * t + 2] - local_uv[3 * t];
+      const Vec2 a = local_uv[3 * t + 1] - local_uv[3 * t], b = local_uv[3 * t + 2] - local_uv[3 * t];
       if (!(a.x() * b.y() - a.y() * b.x() < 0)) continue;
       for (int k = 0; k < 3; ++k)  // the flipped triangle's inner vertices and their inner neighbours
         if (inner[refined.F(t, k)] >= 0)
@@ -655,21 +654,11 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
     if (marked == 0) break;
   }
 
-  // 4. Corners in the glued layout; a point keeps one uv per chart it is in.
+  // 4. Corners in the glued layout (exact_map below gives each vertex one uv per chart).
   glue_cells(tmesh, x, frames);
-  std::vector<std::vector<Vec2>> uv_of(nv);
   map.corner_uv.resize(3 * static_cast<size_t>(nf));
-  for (int t = 0; t < nf; ++t) {
-    const CellFrame& frame = frames[map.face_cell[t]];
-    for (int k = 0; k < 3; ++k) {
-      const int v = refined.F(t, k);
-      Vec2 uv = frame.global(local_uv[3 * t + k]);
-      for (const Vec2& seen : uv_of[v])
-        if ((seen - uv).cwiseAbs().maxCoeff() < 1e-9) uv = seen;
-      if (uv_of[v].empty() || uv_of[v].back() != uv) uv_of[v].push_back(uv);
-      map.corner_uv[3 * t + k] = uv;
-    }
-  }
+  for (int t = 0; t < nf; ++t)
+    for (int k = 0; k < 3; ++k) map.corner_uv[3 * t + k] = frames[map.face_cell[t]].global(local_uv[3 * t + k]);
 
   // 5. Exact, and degenerate triangles opened where single moves can.
   map.param = exact_map(refined, map.corner_uv, options.fraction_bits);

@@ -391,8 +391,6 @@ void Session::run_quantization_stage(Progress& progress) {
       state.quantization.reset();
     if (!state.quantization) {
       state.igm.reset();
-      state.cell_map.reset();
-      state.cell_map_report = Json();
       state.quads.reset();
       QuantizationOptions options;
       options.scale = scale;
