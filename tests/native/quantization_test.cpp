@@ -362,6 +362,34 @@ TEST(QuantizationValidity, SingularityCollapsingOntoAFeatureIsDetected) {
   EXPECT_TRUE(check_quantization_validity(tm, grid_lengths(tm, {2, 3, 2, 0}, {2, 3})).valid);
 }
 
+TEST(QuantizationValidity, ParallelFeatureLoopsMayNotCollapse) {
+  // A torus of 3 x 3 patches whose middle row is bounded by two closed feature loops: no singular
+  // node anywhere, so only the searches from feature points can see the loops glued together.
+  PatchLayout layout = make_grid_layout({2, 2, 2}, {2, 1, 2}, true, true);
+  layout.feature_side.assign(4 * layout.patches.size(), 0);
+  for (int i = 0; i < 3; ++i) {
+    layout.feature_side[4 * i + 2] = layout.feature_side[4 * (3 + i) + 0] = 1;        // lower loop
+    layout.feature_side[4 * (3 + i) + 2] = layout.feature_side[4 * (6 + i) + 0] = 1;  // upper loop
+  }
+  const TMesh tm = build_patch_tmesh(layout, 0, 1);
+  for (const auto& n : tm.nodes) ASSERT_TRUE(!n.singular() && n.kind != TMeshNode::Kind::FeatureCorner);
+  auto lengths = [&](const std::vector<int64_t>& rh) {
+    std::vector<int64_t> x(tm.edges.size(), -1);
+    for (size_t c = 0; c < tm.cells.size(); ++c)
+      for (int s = 0; s < 4; ++s)
+        for (int e : tm.cells[c].sides[s]) x[e] = s % 2 == 0 ? 2 : rh[c / 3];
+    return x;
+  };
+  EXPECT_TRUE(check_quantization_validity(tm, lengths({2, 1, 2})).valid);
+  // The middle row of height 0: the two creases would become one.
+  const QuantizationValidity v = check_quantization_validity(tm, lengths({2, 0, 2}));
+  EXPECT_FALSE(v.valid);
+  EXPECT_GE(v.feature_edge, 0);
+  EXPECT_NE(v.reason.find("feature node"), std::string::npos) << v.reason;
+  // The bottom row of height 0 lays the lower loop onto a plain isoline: valid.
+  EXPECT_TRUE(check_quantization_validity(tm, lengths({0, 1, 2})).valid);
+}
+
 TEST(QuantizationValidity, PolycubeLayerCollapseIsInvalid) {
   // An L-shaped polycube has convex and concave singular corners on sharp feature curves; a layer
   // of zero thickness makes them collapse.

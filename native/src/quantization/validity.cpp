@@ -12,7 +12,6 @@ ValidityChecker::ValidityChecker(const CellSystem& system) : sys_(system) {
   const int N = system.num_nodes();
   is_singular_.assign(N, 0);
   is_feature_point_.assign(N, 0);
-  singular_index_.assign(N, -1);
   for (int n = 0; n < N; ++n) {
     const TMeshNode& node = tm.nodes[n];
     // Singularities, feature corners (curve turns, ends, branches, virtual corners) and boundary
@@ -20,20 +19,20 @@ ValidityChecker::ValidityChecker(const CellSystem& system) : sys_(system) {
     is_singular_[n] = node.singular() || node.kind == TMeshNode::Kind::FeatureCorner ||
                       node.kind == TMeshNode::Kind::BoundaryNode;
     is_feature_point_[n] = node.on_feature;
-    if (is_singular_[n]) {
-      singular_index_[n] = static_cast<int>(singular_nodes_.size());
-      singular_nodes_.push_back(n);
-    }
+    if (is_singular_[n]) sources_.push_back(n);
   }
   for (const TMeshEdge& e : tm.edges)
     if (e.on_feature) is_feature_point_[e.from] = is_feature_point_[e.to] = 1;
+  // Then the other feature points, whose searches find two curves collapsing onto each other.
+  for (int n = 0; n < N; ++n)
+    if (is_feature_point_[n] && !is_singular_[n]) sources_.push_back(n);
   node_stamp_.assign(N, 0);
   trivial_stamp_.assign(N, 0);
   node_trail_.assign(N, -1);
   cell_seen_.assign(system.num_cells(), 0);
   readers_.assign(system.num_cells(), {});
-  generation_.assign(singular_nodes_.size(), 0);
-  affected_seen_.assign(singular_nodes_.size(), 0);
+  generation_.assign(sources_.size(), 0);
+  affected_seen_.assign(sources_.size(), 0);
 }
 
 ValidityChecker::Point ValidityChecker::point_on_side(const std::vector<int64_t>& x, int side_id,
@@ -101,6 +100,10 @@ bool ValidityChecker::search(int i, const std::vector<int64_t>& x, QuantizationV
                              std::vector<int>* witness, std::vector<int>* cells) {
   const TMesh& tm = sys_.tmesh();
   ++searched_;
+  // A feature source's zero-distance set may share points with others' (along its own curve):
+  // it is explored on its own. Singular sources come first in every check, sharing marks.
+  const bool feature_source = !is_singular_[i];
+  if (feature_source) begin_check();
   reads_ = cells;
   if (cells && ++read_stamp_ == 0) {
     std::fill(cell_seen_.begin(), cell_seen_.end(), 0);
@@ -149,7 +152,8 @@ bool ValidityChecker::search(int i, const std::vector<int64_t>& x, QuantizationV
     }
     trail_.push_back({p, i, parent, via_edge, via_cell});
     if (p.node >= 0) {
-      if (p.node != i && is_singular_[p.node]) {
+      // (A feature point at zero distance from a singular node is that node's violation.)
+      if (p.node != i && is_singular_[p.node] && !feature_source) {
         result.valid = false;
         result.node = i, result.other_node = p.node;
         violation = index;
@@ -221,20 +225,21 @@ bool ValidityChecker::search(int i, const std::vector<int64_t>& x, QuantizationV
   return false;
 }
 
-void ValidityChecker::describe(QuantizationValidity& result) {
+void ValidityChecker::describe(QuantizationValidity& result) const {
   if (result.valid) return;
   if (result.other_node >= 0)
     result.reason = "singular nodes " + std::to_string(result.node) + " and " + std::to_string(result.other_node) +
                     " collapse (zero parametric distance)";
   else
-    result.reason = "singular node " + std::to_string(result.node) + " collapses onto feature/boundary edge " +
+    result.reason = std::string(is_singular_[result.node] ? "singular" : "feature") + " node " +
+                    std::to_string(result.node) + " collapses onto feature/boundary edge " +
                     std::to_string(result.feature_edge);
 }
 
 QuantizationValidity ValidityChecker::check(const std::vector<int64_t>& x, std::vector<int>* witness) {
   begin_check();
   QuantizationValidity result;
-  for (int i : singular_nodes_)
+  for (int i : sources_)
     if (!search(i, x, result, witness, nullptr)) break;
   describe(result);
   return result;
@@ -251,9 +256,9 @@ QuantizationValidity ValidityChecker::commit_full(const std::vector<int64_t>& x)
   QuantizationValidity result;
   std::vector<int> cells;
   committed_ = true;
-  for (size_t si = 0; si < singular_nodes_.size(); ++si) {
+  for (size_t si = 0; si < sources_.size(); ++si) {
     cells.clear();
-    if (!search(singular_nodes_[si], x, result, nullptr, &cells)) {
+    if (!search(sources_[si], x, result, nullptr, &cells)) {
       committed_ = false;
       break;
     }
@@ -291,7 +296,7 @@ QuantizationValidity ValidityChecker::check_changed(const std::vector<int64_t>& 
   if (pending_cells_.size() < affected_.size()) pending_cells_.resize(affected_.size());
   for (size_t k = 0; k < affected_.size(); ++k) {
     pending_cells_[k].clear();
-    if (!search(singular_nodes_[affected_[k]], x, result, witness, commit ? &pending_cells_[k] : nullptr)) break;
+    if (!search(sources_[affected_[k]], x, result, witness, commit ? &pending_cells_[k] : nullptr)) break;
   }
   if (result.valid && commit)
     for (size_t k = 0; k < affected_.size(); ++k) remember(affected_[k], pending_cells_[k]);

@@ -9,6 +9,9 @@
 // feature/boundary edge other than the zero-length continuation of i's own feature curves.
 // "Singular" here means index != 0, a feature corner or a boundary corner/virtual boundary node
 // (the corners and virtual singularities of §9.1, TMeshNode::Kind FeatureCorner/BoundaryNode).
+// Beyond the paper, the search also starts from every other node on a feature or boundary curve:
+// two curves (or two parts of one) at zero distance without a singular node between them would
+// glue distinct creases together and leave quads of zero area.
 //
 // Incremental use (stage II): the search from i reads x only through the cells it looks at (edge
 // lengths via the edges' cells, side sums of cells). The checker remembers these cells per
@@ -41,7 +44,6 @@ class ValidityChecker {
   QuantizationValidity check_changed(const std::vector<int64_t>& x, const std::vector<int>& changed,
                                      std::vector<int>* witness, bool commit);
 
-  const std::vector<int>& singular_nodes() const { return singular_nodes_; }
   int64_t searched_singularities() const { return searched_; }  // statistics
 
  private:
@@ -68,12 +70,11 @@ class ValidityChecker {
   void read_edge(int e);
   void read_cell(int c);
   void remember(int singular_index, const std::vector<int>& cells);
-  static void describe(QuantizationValidity& result);
+  void describe(QuantizationValidity& result) const;
 
   const CellSystem& sys_;
   std::vector<char> is_singular_, is_feature_point_;
-  std::vector<int> singular_nodes_;
-  std::vector<int> singular_index_;  // #N: position in singular_nodes_, or -1
+  std::vector<int> sources_;  // where searches start: the singular nodes, then other feature points
   std::vector<uint32_t> node_stamp_, trivial_stamp_;
   std::vector<int> node_trail_;
   struct KeyHash {
