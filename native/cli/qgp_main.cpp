@@ -22,6 +22,7 @@
 #include "intake/read_mesh_file.h"
 #include "mesh_writers.h"
 #include "pipeline/session.h"
+#include "pipeline/uv_mesh.h"
 #include "tmesh/tmesh_system.h"
 
 namespace {
@@ -186,65 +187,17 @@ int exit_code_for(qgp::ErrorCode code) {
   }
 }
 
-// --uv-out: the repaired input mesh (faces split by the pipeline included) with per-corner
-// texture coordinates: the integer-grid map (1 unit = 1 quad) when every component has one,
-// else the continuous seamless map (1 unit = the target edge length).
-enum class UvMap { None, Seamless, IntegerGrid };
-UvMap available_uv_map(const qgp::Session& session) {
-  if (session.intake() == nullptr || session.components().empty()) return UvMap::None;
-  bool igm = true, seamless = true;
-  for (const auto& c : session.components()) {
-    igm = igm && c.igm.has_value();
-    seamless = seamless && c.seamless.has_value();
-  }
-  return igm ? UvMap::IntegerGrid : seamless ? UvMap::Seamless : UvMap::None;
-}
-
-void write_uv_output(const std::string& path, const qgp::Session& session, UvMap map) {
-  const auto& components = session.components();
-  const qgp::IntakeResult* intake = session.intake();
-  // A component whose integer-grid map fell back to the cell map is written as the mesh with the
-  // T-mesh inserted (its extra vertices follow the intake's, like the pipeline's split centroids).
-  auto uv_mesh = [&](const qgp::ComponentState& c) -> const qgp::TriMesh& {
-    return map == UvMap::IntegerGrid && c.cell_map ? c.cell_map->mesh : c.mesh;
-  };
-  qgp::TriMesh out;
-  int num_vertices = intake->mesh.num_vertices(), num_faces = 0;
-  for (const auto& c : components) {
-    for (int v : c.vertex_map) num_vertices += v < 0;
-    num_vertices += uv_mesh(c).num_vertices() - c.mesh.num_vertices();
-    num_faces += uv_mesh(c).num_faces();
-  }
-  out.V.resize(num_vertices, 3);
-  out.V.topRows(intake->mesh.num_vertices()) = intake->mesh.V;
-  out.F.resize(num_faces, 3);
-  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> uv(3 * num_faces, 2);
-  int next_vertex = intake->mesh.num_vertices(), face = 0;
-  for (const auto& c : components) {
-    const qgp::TriMesh& mesh = uv_mesh(c);
-    std::vector<int> id(mesh.num_vertices());
-    for (int v = 0; v < mesh.num_vertices(); ++v) {
-      id[v] = v < c.mesh.num_vertices() && c.vertex_map[v] >= 0 ? c.vertex_map[v] : next_vertex++;
-      out.V.row(id[v]) = mesh.V.row(v);
-    }
-    for (int f = 0; f < mesh.num_faces(); ++f, ++face)
-      for (int k = 0; k < 3; ++k) {
-        out.F(face, k) = id[mesh.F(f, k)];
-        if (map == UvMap::IntegerGrid && c.cell_map)
-          uv.row(3 * face + k) = c.cell_map->corner_uv[3 * f + k].transpose();
-        else if (map == UvMap::IntegerGrid)
-          for (int a = 0; a < 2; ++a) uv(3 * face + k, a) = c.igm->to_double(c.igm->uv[3 * f + k][a]);
-        else
-          uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);
-      }
-  }
+// --uv-out: the map as its own mesh (pipeline/uv_mesh.h): the integer-grid map when every
+// component has one, else the continuous seamless map.
+void write_uv_output(const std::string& path, const qgp::Session& session, qgp::UvMapKind kind) {
+  const qgp::UvMesh out = qgp::compose_uv_mesh(session, kind);
   std::ostringstream header;
-  if (map == UvMap::IntegerGrid)
+  if (kind == qgp::UvMapKind::IntegerGrid)
     header << "qgp integer-grid map: per-corner vt, 1 uv unit = 1 quad";
   else
     header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
-           << components[0].seamless_edge_length << " model units";
-  qgp::cli::write_obj(path, out, &uv, header.str());
+           << session.components()[0].seamless_edge_length << " model units";
+  qgp::cli::write_obj(path, out.mesh, &out.uv, header.str());
 }
 
 // --layout-out: the T-mesh (motorcycle graph) of every component as OBJ polylines.
@@ -282,8 +235,9 @@ bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session) 
       ok = false;
     }
   };
-  const UvMap map = session ? available_uv_map(*session) : UvMap::None;
-  attempt(cl.uv_out, "parametrization", map != UvMap::None, [&] { write_uv_output(cl.uv_out, *session, map); });
+  qgp::UvMapKind map = qgp::UvMapKind::Seamless;
+  const bool has_map = session && qgp::available_uv_map(*session, &map);
+  attempt(cl.uv_out, "parametrization", has_map, [&] { write_uv_output(cl.uv_out, *session, map); });
   attempt(cl.layout_out, "T-mesh layout", session && has_layout(*session),
           [&] { write_layout_output(cl.layout_out, *session); });
   return ok;

@@ -237,7 +237,9 @@ TEST(CApi, ResultsAreNotReadyBeforeAJobProducesThem) {
   int64_t nv = -1, nq = -1, ncut = -1;
   EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
   EXPECT_EQ(qgp_result_uv_counts(s, &ncut), QGP_ERR_NOT_READY);
+  EXPECT_EQ(qgp_result_uv_mesh_counts(s, &nv, &nq, nullptr), QGP_ERR_NOT_READY);
   EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_EQ(qgp_result_uv_mesh_counts(s, &nv, &nq, nullptr), QGP_ERR_NOT_READY);
   EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
   EXPECT_NE(std::string(qgp_session_error(s)).find("remesh"), std::string::npos);
   qgp_session_free(s);
@@ -270,6 +272,53 @@ TEST(CApi, CreateFromFile) {
   qgp_session_free(s);
   EXPECT_EQ(qgp_session_create_from_file("/nonexistent.obj", &s), QGP_ERR_UNREADABLE_FILE);
   EXPECT_NE(std::string(qgp_last_error()).find("does not exist"), std::string::npos);
+}
+
+// The grid-UV job with "fallback_uv_map": on joint at 500 quads, whose global map stays flipped,
+// the map comes as a refined mesh without a flipped uv triangle; on the torus, whose global map is
+// fine, on the intake triangles themselves.
+TEST(CApiMeshes, UvMeshIsRefinedWhereTheGlobalMapStaysFlipped) {
+  for (const char* name : {"joint.obj", "torus.obj"}) {
+    SCOPED_TRACE(name);
+    qgp_session* s = nullptr;
+    ASSERT_EQ(qgp_session_create_from_file((std::string(QGP_MESH_DIR) + "/" + name).c_str(), &s), QGP_OK);
+    ASSERT_EQ(qgp_session_set_option(s, "target_faces", 500), QGP_OK);
+    ASSERT_EQ(qgp_session_set_option(s, "fallback_uv_map", 1), QGP_OK);
+    ASSERT_EQ(qgp_job_start(s, QGP_JOB_GRID_UV), QGP_OK);
+    int state = -1;
+    ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+    const auto report = qgp::Json::parse(report_of(s));
+    const auto& igm = report["igm"]["components"][0];
+    const bool global_ok = igm["flipped_triangles"].get<int>() + igm["winding_defects"].get<int>() == 0;
+    const bool used = igm.contains("cell_map") && igm["cell_map"]["used"].get<bool>();
+    EXPECT_EQ(used, std::string(name) == "joint.obj") << igm.dump();
+    EXPECT_TRUE(used || global_ok) << igm.dump();  // a flipped map always falls back
+    int64_t nv = 0, nt = 0, nv_intake = 0, nt_intake = 0;
+    int32_t refined = -1;
+    ASSERT_EQ(qgp_result_uv_mesh_counts(s, &nv, &nt, &refined), QGP_OK);
+    ASSERT_EQ(qgp_intake_counts(s, &nv_intake, &nt_intake, nullptr), QGP_OK);
+    EXPECT_EQ(refined, used ? 1 : 0);
+    if (used) EXPECT_GT(nt, nt_intake);
+    else EXPECT_EQ(nt, nt_intake);
+    EXPECT_GE(nv, nv_intake);
+    std::vector<double> vertices(3 * nv), uv(6 * nt);
+    std::vector<int32_t> triangles(3 * nt), source(nt);
+    ASSERT_EQ(qgp_result_uv_mesh_fetch(s, vertices.data(), triangles.data(), uv.data(), source.data()), QGP_OK);
+    int flipped = 0;
+    double area = 0;
+    for (int64_t t = 0; t < nt; ++t) {
+      const double* c = &uv[6 * t];
+      const double a = 0.5 * ((c[2] - c[0]) * (c[5] - c[1]) - (c[3] - c[1]) * (c[4] - c[0]));
+      flipped += a < 0;
+      area += a;
+      for (int k = 0; k < 3; ++k) ASSERT_TRUE(triangles[3 * t + k] >= 0 && triangles[3 * t + k] < nv);
+      EXPECT_TRUE(source[t] >= 0 && source[t] < report["input"]["input_faces"].get<int>());
+    }
+    EXPECT_EQ(flipped, 0);
+    // 1 uv unit = 1 quad: the map covers as many unit squares as the quantization expects.
+    EXPECT_NEAR(area, report["quantization"]["quads_expected"].get<double>(), 1e-6);
+    qgp_session_free(s);
+  }
 }
 
 }  // namespace

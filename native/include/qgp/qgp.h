@@ -73,7 +73,9 @@ QGP_API const char* qgp_session_error(qgp_session* session);
 QGP_API int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t num_edges);
 
 /* Numeric options: "target_faces", "edge_length", "sharp_angle" (degrees, < 0 = off),
- * "drop_bad_components" (0/1). A value <= 0 unsets target_faces / edge_length. */
+ * "drop_bad_components" (0/1), "fallback_uv_map" (0/1: build the flip-free cell map where the
+ * global map stays flipped, see qgp_result_uv_mesh_counts). A value <= 0 unsets target_faces /
+ * edge_length. */
 QGP_API int qgp_session_set_option(qgp_session* session, const char* name, double value);
 
 /* String options: "quantizer" = "greedy" | "round". */
@@ -117,6 +119,17 @@ QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_
  * cuts: the seam edges as input vertex pairs (num_cut_edges x 2). */
 QGP_API int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges);
 QGP_API int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts);
+
+/* The integer-grid map as a triangle mesh of its own (last successful grid-UV or remesh job): the
+ * repaired input, except that a component whose global map stayed flipped or wound and which got
+ * the fallback cell map (option "fallback_uv_map" = 1 before the job) has the T-mesh inserted; that
+ * map has no flipped triangle. Counts (refined_components: how many components are refined), then
+ * vertices nv x 3, triangles nt x 3, uv nt x 3 x 2 (1 unit = 1 quad) and per triangle the input
+ * face it lies in (nt; -1 if unknown). QGP_ERR_NOT_READY without a map. Any pointer may be null. */
+QGP_API int qgp_result_uv_mesh_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
+                                      int32_t* refined_components);
+QGP_API int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* triangles, double* uv,
+                                     int32_t* source_face);
 
 /* Measures any polygon mesh (e.g. another remesher's output) against a reference triangle mesh
  * (repaired by intake first): vertices nv x 3, face_sizes nf, corners sum(face_sizes) indices;

@@ -17,6 +17,7 @@
 #include "intake/read_mesh_file.h"
 #include "quad_extraction/polygon_metrics.h"
 #include "pipeline/session.h"
+#include "pipeline/uv_mesh.h"
 
 struct qgp_soup {
   qgp::PolygonSoup soup;
@@ -212,9 +213,12 @@ int qgp_session_set_option(qgp_session* session, const char* name, double value)
       options.sharp_angle_deg = value;
     } else if (key == "drop_bad_components") {
       options.drop_bad_components = value != 0;
+    } else if (key == "fallback_uv_map") {
+      options.fallback_uv_map = value != 0;
     } else {
-      throw qgp::Error(qgp::ErrorCode::InvalidArgument,
-                       "unknown option '" + key + "' (target_faces, edge_length, sharp_angle, drop_bad_components)");
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "unknown option '" + key +
+                                                            "' (target_faces, edge_length, sharp_angle, "
+                                                            "drop_bad_components, fallback_uv_map)");
     }
     session->session->set_options(options);
     return QGP_OK;
@@ -407,6 +411,33 @@ int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
         *cuts++ = e[0];
         *cuts++ = e[1];
       }
+    return QGP_OK;
+  });
+}
+
+int qgp_result_uv_mesh_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
+                              int32_t* refined_components) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::UvMesh uv = qgp::compose_uv_mesh(*session->session, qgp::UvMapKind::IntegerGrid);
+    if (num_vertices) *num_vertices = uv.mesh.num_vertices();
+    if (num_triangles) *num_triangles = uv.mesh.num_faces();
+    if (refined_components) *refined_components = uv.refined_components;
+    return QGP_OK;
+  });
+}
+
+int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* triangles, double* uv,
+                             int32_t* source_face) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::UvMesh m = qgp::compose_uv_mesh(*session->session, qgp::UvMapKind::IntegerGrid);
+    if (vertices) std::memcpy(vertices, m.mesh.V.data(), sizeof(double) * 3 * m.mesh.V.rows());
+    if (triangles) std::memcpy(triangles, m.mesh.F.data(), sizeof(int32_t) * 3 * m.mesh.F.rows());
+    if (uv) std::memcpy(uv, m.uv.data(), sizeof(double) * 2 * m.uv.rows());
+    if (source_face) std::copy(m.source_face.begin(), m.source_face.end(), source_face);
     return QGP_OK;
   });
 }
