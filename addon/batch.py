@@ -116,8 +116,12 @@ def process(binding, path, args):
         if args.uv:
             activate(source)
             bpy.ops.object.qgp_grid_uv(**target_kwargs(args), quads_per_unit=args.quads_per_unit)
-            write_obj(os.path.join(args.out, name + "_uv.obj"), source, with_uv=True)
+            # Where only a refined copy has a flip-free map, the operator made it the active object.
+            mapped = bpy.context.active_object
+            refined = mapped is not source and mapped.name.startswith(name + "_grid_uv")
+            write_obj(os.path.join(args.out, name + "_uv.obj"), mapped if refined else source, with_uv=True)
             entry["uv"] = True
+            entry["uv_refined"] = refined
     except (RuntimeError, binding.QGPError) as e:
         entry["status"] = "error"
         entry["reason"] = str(e).replace("Error: ", "").strip()

@@ -49,17 +49,23 @@ class SourceMesh:
         return hash((self.vertices.tobytes(), self.triangles.tobytes(), self.features.tobytes()))
 
 
-def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh):
-    """New object '<source>_quads' with the source's transform, parent, collections and materials."""
-    name = source.name + "_quads"
+def _object_like(context, source, name, vertices, faces, face_triangle, source_mesh, loop_uv=None,
+                 layer_name=None):
+    """New object `name` with the source's transform, parent, collections and materials; each face
+    takes the material of the source triangle `face_triangle` names. loop_uv: (loops, 2) per face
+    corner in face order, written to the UV layer `layer_name`."""
     mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist(), [], quads.tolist())
+    mesh.from_pydata(vertices.tolist(), [], faces.tolist())
     for slot in source.material_slots:
         mesh.materials.append(slot.material)
-    if len(source.material_slots) > 1 and len(quads):
-        tri = np.clip(quad_triangle, 0, len(source_mesh.triangle_polygon) - 1)
+    if len(source.material_slots) > 1 and len(faces):
+        tri = np.clip(face_triangle, 0, len(source_mesh.triangle_polygon) - 1)
         index = source_mesh.polygon_material[source_mesh.triangle_polygon[tri]]
         mesh.polygons.foreach_set("material_index", index.astype(np.int32))
+    if loop_uv is not None:
+        layer = mesh.uv_layers.new(name=layer_name)
+        layer.data.foreach_set("uv", loop_uv.astype(np.float32).reshape(-1))
+        mesh.uv_layers.active = layer
     mesh.update(calc_edges=True)
     mesh.validate(clean_customdata=False)
     obj = bpy.data.objects.new(name, mesh)
@@ -74,6 +80,21 @@ def create_quad_object(context, source, vertices, quads, quad_triangle, source_m
     obj.select_set(True)
     context.view_layer.objects.active = obj
     return obj
+
+
+def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh):
+    """New object '<source>_quads' with the source's transform, parent, collections and materials."""
+    return _object_like(context, source, source.name + "_quads", vertices, quads, quad_triangle, source_mesh)
+
+
+def create_grid_uv_object(context, source, vertices, triangles, corner_uv, triangle_source, source_mesh,
+                          quads_per_unit, layer_name="QGP Grid"):
+    """New object '<source>_grid_uv': the refined triangles of a flip-free integer-grid map
+    (corner_uv: (triangles, 3, 2), 1 unit = 1 quad) in the UV layer `layer_name`, scaled to
+    `quads_per_unit` quads per UV unit."""
+    loop_uv = np.nan_to_num(corner_uv.reshape(-1, 2) / float(quads_per_unit))
+    return _object_like(context, source, source.name + "_grid_uv", vertices, triangles, triangle_source, source_mesh,
+                        loop_uv, layer_name)
 
 
 def write_grid_uvs(mesh, source_mesh, corner_uv, quads_per_unit, layer_name="QGP Grid"):

@@ -1,4 +1,5 @@
-"""Operators: Quantized Retopo (new quad object) and Integer-Grid UVs (UV layer on the source).
+"""Operators: Quantized Retopo (new quad object) and Integer-Grid UVs (UV layer on the source, or a
+refined copy where only that has a flip-free map).
 
 Both run synchronously in execute() (scripts, redo panel, blender -b) and as modal jobs from
 invoke() (progress bar, status text, Esc cancels). The native sessions live in worker processes
@@ -152,7 +153,11 @@ class _TargetProperties:
             session.set_option("target_faces", self.target_faces)
         else:
             session.set_option("edge_length", self.edge_length)
+        session.set_option("fallback_uv_map", 1 if self._wants_fallback_map() else 0)
         return session
+
+    def _wants_fallback_map(self):
+        return False
 
     def execute(self, context):
         try:
@@ -223,8 +228,25 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
                                             description="Grid cells per UV unit: a texture of this period "
                                                         "tiles without visible seams")
     mark_seams: bpy.props.BoolProperty(name="Mark Seams", default=False, description="Mark the cuts as seams")
+    flip_free_copy: bpy.props.BoolProperty(
+        name="Flip-Free Copy", default=True,
+        description="Where the map on the mesh's own triangles would keep flipped triangles, write a new "
+                    "object '<name>_grid_uv' instead: the mesh with the quad layout's edges inserted, whose "
+                    "map has none (the source stays unchanged)")
+
+    def _wants_fallback_map(self):
+        return self.flip_free_copy
 
     def _finish(self, context):
+        if self.flip_free_copy:
+            vertices, triangles, corner_uv, triangle_source, refined = self._session.uv_mesh()
+            if refined:
+                obj = blender_mesh.create_grid_uv_object(context, self._source_obj, vertices, triangles, corner_uv,
+                                                         triangle_source, self._source, self.quads_per_unit)
+                self.report({"INFO"}, f"{obj.name}: the map needed the layout's edges inserted; "
+                                      f"UV layer 'QGP Grid' on {len(triangles)} triangles, none flipped "
+                                      f"(source unchanged)")
+                return {"FINISHED"}
         corner_uv, cuts = self._session.grid_uv(len(self._source.triangles))
         mesh = self._source_obj.data
         blender_mesh.write_grid_uvs(mesh, self._source, corner_uv, self.quads_per_unit)
@@ -233,12 +255,12 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
             message += f", {blender_mesh.mark_seams(mesh, self._source, cuts)} seam edges marked"
         mesh.update()
         # A map the global solve left flipped: its valid fallback lives on a refined mesh, which the
-        # source object's loops cannot hold (`qgp remesh --uv-out` writes it).
+        # source object's loops cannot hold (Flip-Free Copy writes it as a new object).
         igm = self._session.report().get("igm", {})
         flipped = igm.get("flipped_triangles", 0)
         if flipped:
-            self.report({"WARNING"}, f"{message}; {flipped} triangle(s) of the map are flipped "
-                                     "(the command line's --uv-out writes a flip-free map on a refined mesh)")
+            hint = "no flip-free fallback was found" if self.flip_free_copy else "turn on Flip-Free Copy"
+            self.report({"WARNING"}, f"{message}; {flipped} triangle(s) of the map are flipped ({hint})")
         else:
             self.report({"INFO"}, message)
         return {"FINISHED"}
@@ -247,6 +269,7 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
         self._draw_target(self.layout)
         self.layout.prop(self, "quads_per_unit")
         self.layout.prop(self, "mark_seams")
+        self.layout.prop(self, "flip_free_copy")
 
 
 classes = (OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_grid_uv)

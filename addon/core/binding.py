@@ -113,6 +113,8 @@ def _declare(lib):
         "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
         "qgp_result_uv_counts": (c_int, [vp, p_int64]),
         "qgp_result_uv_fetch": (c_int, [vp, p_double, p_int32]),
+        "qgp_result_uv_mesh_counts": (c_int, [vp, p_int64, p_int64, p_int32]),
+        "qgp_result_uv_mesh_fetch": (c_int, [vp, p_double, p_int32, p_double, p_int32]),
     }
     for name, (restype, argtypes) in sigs.items():
         fn = getattr(lib, name)
@@ -311,3 +313,20 @@ class Session(SessionLifetime):
         self._check(self._lib.qgp_result_uv_fetch(self._handle, _ptr(uv, ctypes.c_double),
                                                   _ptr(cuts, ctypes.c_int32)))
         return uv, cuts
+
+    def uv_mesh(self):
+        """The integer-grid map as its own triangle mesh: (vertices (n,3) float64, triangles (t,3)
+        int32, per-corner uv (t,3,2) float64 with 1 unit = 1 quad, input face per triangle (t,) int32,
+        number of components refined by the flip-free fallback (0: the intake triangles))."""
+        if not hasattr(self._lib, "qgp_result_uv_mesh_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return the refined grid-UV mesh")
+        nv, nt, refined = ctypes.c_int64(), ctypes.c_int64(), ctypes.c_int32()
+        self._check(self._lib.qgp_result_uv_mesh_counts(self._handle, ctypes.byref(nv), ctypes.byref(nt),
+                                                        ctypes.byref(refined)))
+        v = np.empty((nv.value, 3), np.float64)
+        t = np.empty((nt.value, 3), np.int32)
+        uv = np.empty((nt.value, 3, 2), np.float64)
+        src = np.empty(nt.value, np.int32)
+        self._check(self._lib.qgp_result_uv_mesh_fetch(self._handle, _ptr(v, ctypes.c_double), _ptr(t, ctypes.c_int32),
+                                                       _ptr(uv, ctypes.c_double), _ptr(src, ctypes.c_int32)))
+        return v, t, uv, src, refined.value

@@ -190,6 +190,9 @@ class WorkerSession(binding.SessionLifetime):
     def grid_uv(self, num_triangles):
         return self._call("grid_uv", num_triangles)
 
+    def uv_mesh(self):
+        return self._call("uv_mesh")
+
 
 def serve(fd):
     """The child's loop: one session, requests until "close" or the parent goes away."""

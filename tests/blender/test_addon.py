@@ -334,7 +334,8 @@ def test_grid_uv(binding):
     for obj, target, per_unit in cases:
         select_only(obj)
         vertices_before = [tuple(v.co) for v in obj.data.vertices]
-        result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit)
+        result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit,
+                                            flip_free_copy=False)
         assert result == {"FINISHED"}, result
         layer = obj.data.uv_layers.get("QGP Grid")
         assert layer is not None, [l.name for l in obj.data.uv_layers]
@@ -348,6 +349,39 @@ def test_grid_uv(binding):
         residual = grid_seam_residual(obj.data, layer, per_unit)
         assert residual < 1e-3, residual
         print(f"{obj.name}: grid UVs on {len(uv)} loops, {seams} seams, transition residual {residual:.2e}")
+
+
+def test_grid_uv_flip_free_copy(binding):
+    """joint at 500 quads: its global map keeps flipped triangles, so Flip-Free Copy writes a new
+    object (the layout's edges inserted) whose map has none; without it, the source gets the map."""
+    reset_scene()
+    joint = import_mesh(binding, "joint.obj")
+    before = [tuple(v.co) for v in joint.data.vertices]
+    result = bpy.ops.object.qgp_grid_uv(target_faces=500, quads_per_unit=2.0)
+    assert result == {"FINISHED"}, result
+    copy = bpy.data.objects.get("joint_grid_uv")
+    assert copy is not None, [o.name for o in bpy.data.objects]
+    assert "QGP Grid" not in joint.data.uv_layers and [tuple(v.co) for v in joint.data.vertices] == before
+    assert copy.matrix_world == joint.matrix_world and bpy.context.active_object == copy
+    mesh = copy.data
+    assert len(mesh.polygons) > len(joint.data.polygons) and all(len(p.vertices) == 3 for p in mesh.polygons)
+    layer = mesh.uv_layers["QGP Grid"]
+    uv = [(d.uv[0] * 2.0, d.uv[1] * 2.0) for d in layer.data]
+    areas = []
+    for poly in mesh.polygons:
+        a, b, c = (uv[i] for i in poly.loop_indices)
+        areas.append(0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])))
+    # Float32 UVs: exactly degenerate triangles (collapsed cells) may round to a tiny negative area.
+    flipped = sum(a < -1e-6 for a in areas)
+    assert flipped == 0, flipped
+    residual = grid_seam_residual(mesh, layer, 2.0)
+    assert residual < 1e-3, residual
+    print(f"{copy.name}: flip-free grid UVs on {len(mesh.polygons)} triangles (source {len(joint.data.polygons)}), "
+          f"uv area {sum(areas):.1f} quads, transition residual {residual:.2e}, source unchanged")
+    select_only(joint)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=500, flip_free_copy=False)
+    assert result == {"FINISHED"}, result
+    assert "QGP Grid" in joint.data.uv_layers and bpy.data.objects.get("joint_grid_uv.001") is None
 
 
 def test_undo_restores_scene():
@@ -380,15 +414,21 @@ def test_batch():
 
 def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
-    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off")]
+    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off", "joint.obj")]
     proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
                            os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "500", "--uv"],
                           capture_output=True, text=True)
     report = json.load(open(os.path.join(out, "report.json")))
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
-    assert status == {"torus.obj": "ok", "truck.obj": "error", "bunny.off": "ok"}, (status, proc.stderr[-2000:])
+    assert status == {"torus.obj": "ok", "truck.obj": "error", "bunny.off": "ok", "joint.obj": "ok"}, \
+        (status, proc.stderr[-2000:])
     assert proc.returncode != 0
-    for name in ("torus", "bunny"):
+    # joint at 500 quads: only the refined copy has a flip-free map; its triangles are written.
+    refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in report["entries"] if e["status"] == "ok"}
+    assert refined == {"torus.obj": False, "bunny.off": False, "joint.obj": True}, refined
+    joint_uv = [l for l in open(os.path.join(out, "joint_uv.obj")) if l.startswith("f ")]
+    assert len(joint_uv) > 446 and all(len(l.split()) == 4 for l in joint_uv), len(joint_uv)
+    for name in ("torus", "bunny", "joint"):
         path = os.path.join(out, name + ".obj")
         faces = [l for l in open(path) if l.startswith("f ")]
         assert faces and all(len(l.split()) == 5 for l in faces), path
@@ -407,6 +447,7 @@ def main():
     test_worker_fault_leaves_blender_running()
     test_quad_remesh(binding)
     test_grid_uv(binding)
+    test_grid_uv_flip_free_copy(binding)
     test_undo_restores_scene()
     test_batch()
     test_batch_success()
