@@ -341,6 +341,13 @@ TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
+// Block with its sharp edges at 40 degrees: its needle and cap triangles (normals of rounding noise)
+// used to add spurious sharp edges, 146 singularities and dozens of flipped, squeezed quads.
+TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
+  const std::vector<std::string> failed = sweep({{"block.obj", 40}}, {2000, 8000});
+  EXPECT_TRUE(failed.empty()) << joined(failed);
+}
+
 // Runs whose quads used to fold against the surface (camelhead's thin ears, coarse limbs and heads)
 // before the untangle step maximized the quads' worst corner areas: the output invariants hold,
 // no quad flipped included.
