@@ -303,7 +303,7 @@ class Session(SessionLifetime):
 
     def grid_uv(self, num_triangles):
         """Integer-grid map per input triangle corner, (num_triangles, 3, 2) float64 (1 unit = 1 quad;
-        NaN where intake removed the triangle), and the cut edges as input vertex pairs (k, 2) int32."""
+        NaN on parts remeshed on a decimated working mesh), and the cut edges as input vertex pairs (k, 2) int32."""
         if not hasattr(self._lib, "qgp_result_uv_counts"):
             raise QGPError(ERR_NOT_READY, "this native library cannot return grid UVs")
         ncut = ctypes.c_int64()

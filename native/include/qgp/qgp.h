@@ -115,7 +115,8 @@ QGP_API int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, 
 QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads, int32_t* source_face);
 
 /* The integer-grid map of the last successful grid-UV or remesh job, per corner of the input
- * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; NaN for triangles intake removed);
+ * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; a triangle intake removed gets the map of
+ * its nearest kept one at its corners; NaN only on parts remeshed on a decimated working mesh);
  * cuts: the seam edges as input vertex pairs (num_cut_edges x 2). */
 QGP_API int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges);
 QGP_API int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts);

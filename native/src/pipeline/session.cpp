@@ -625,6 +625,62 @@ void Session::run_quad_stage(Progress& progress) {
   }
 }
 
+void Session::fill_missing_corner_uvs() {
+  // Corners the per-vertex matching left NaN: those of input triangles intake removed (zero-area,
+  // needles, caps), and those whose input vertex a needle's collapse merged away. They get the map of
+  // the triangle made from their input triangle, else of the one nearest its centroid, extended
+  // affinely: one chart, a (nearly) degenerate uv triangle where the 3D one is. Triangles of
+  // components remeshed on a decimated working mesh stay NaN (their map is not on these triangles).
+  std::vector<std::pair<int, int>> made_from(input_.num_faces(), {-1, -1});  // (component, face)
+  std::vector<std::unique_ptr<TriangleBvh>> bvh(components_.size());
+  for (size_t c = 0; c < components_.size(); ++c) {
+    const ComponentState& state = components_[c];
+    if (state.full_mesh || !state.igm) continue;
+    for (int f = 0; f < state.mesh.num_faces(); ++f)
+      made_from[intake_->input_face[state.face_map[f]]] = {static_cast<int>(c), f};
+  }
+  std::vector<char> kept(input_.num_faces(), 0);
+  for (int f : intake_->input_face) kept[f] = 1;
+  for (int f = 0; f < input_.num_faces(); ++f) {
+    if (input_.face_size(f) != 3) continue;
+    bool missing = false;
+    for (int i = 0; i < 6; ++i) missing = missing || std::isnan(corner_uv_[6 * f + i]);
+    if (!missing || (kept[f] && made_from[f].first < 0)) continue;
+    Vec3 corner[3], centroid = Vec3::Zero();
+    for (int j = 0; j < 3; ++j) centroid += corner[j] = input_.positions[input_.face_vertices[input_.face_start[f] + j]];
+    centroid /= 3;
+    auto [component, t] = made_from[f];
+    if (component < 0) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (size_t c = 0; c < components_.size(); ++c) {
+        if (components_[c].full_mesh || !components_[c].igm) continue;
+        if (!bvh[c]) bvh[c] = std::make_unique<TriangleBvh>(components_[c].mesh);
+        const TriangleBvh::Hit h = bvh[c]->closest_point(centroid);
+        if (h.triangle >= 0 && h.squared_distance < nearest)
+          nearest = h.squared_distance, component = static_cast<int>(c), t = h.triangle;
+      }
+      if (component < 0) continue;
+    }
+    const ComponentState& state = components_[component];
+    const Vec3 a = state.mesh.position(state.mesh.F(t, 0));
+    const Vec3 e1 = state.mesh.position(state.mesh.F(t, 1)) - a, e2 = state.mesh.position(state.mesh.F(t, 2)) - a;
+    const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), det = d11 * d22 - d12 * d12;
+    if (!(det > 0)) continue;
+    for (int j = 0; j < 3; ++j) {
+      if (!std::isnan(corner_uv_[6 * f + 2 * j]) && !std::isnan(corner_uv_[6 * f + 2 * j + 1])) continue;
+      // Barycentric coordinates of the corner projected onto the triangle's plane (may be outside).
+      const Vec3 r = corner[j] - a;
+      const double s1 = (d22 * r.dot(e1) - d12 * r.dot(e2)) / det, s2 = (d11 * r.dot(e2) - d12 * r.dot(e1)) / det;
+      for (int axis = 0; axis < 2; ++axis) {
+        const double u0 = state.igm->to_double(state.igm->uv[3 * t][axis]);
+        const double u1 = state.igm->to_double(state.igm->uv[3 * t + 1][axis]);
+        const double u2 = state.igm->to_double(state.igm->uv[3 * t + 2][axis]);
+        corner_uv_[6 * f + 2 * j + axis] = u0 + s1 * (u1 - u0) + s2 * (u2 - u0);
+      }
+    }
+  }
+}
+
 void Session::collect_results(Job job, Progress& progress) {
   const TriMesh& intake_mesh = intake_->mesh;
   // Per-corner integer-grid UVs of the input triangles: corners are matched by input vertex (faces
@@ -662,6 +718,7 @@ void Session::collect_results(Job job, Progress& progress) {
     }
   }
   cut_edges_.assign(cuts.begin(), cuts.end());
+  fill_missing_corner_uvs();
   if (job != Job::Remesh) return;
 
   Timer timer;
