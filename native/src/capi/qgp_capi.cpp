@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -27,6 +28,8 @@ struct qgp_session {
   std::unique_ptr<qgp::Session> session;
   std::thread worker;
   std::atomic<bool> cancel{false};
+  // Composed on the first request after a job (counts, then fetch); caller's thread, while idle.
+  std::optional<qgp::UvMesh> uv_mesh;
   std::mutex mutex;  // guards everything below
   std::condition_variable finished;
   int state = QGP_STATE_IDLE;
@@ -256,6 +259,7 @@ int qgp_job_start(qgp_session* session, int job) {
       session->fraction = 0;
       session->error.clear();
     }
+    session->uv_mesh.reset();
     session->cancel = false;
     const qgp::Job kind = job == QGP_JOB_INTAKE   ? qgp::Job::Intake
                           : job == QGP_JOB_REMESH ? qgp::Job::Remesh
@@ -415,12 +419,21 @@ int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
   });
 }
 
+namespace {
+
+const qgp::UvMesh& uv_mesh_of(qgp_session* session) {
+  if (!session->uv_mesh) session->uv_mesh = qgp::compose_uv_mesh(*session->session, qgp::UvMapKind::IntegerGrid);
+  return *session->uv_mesh;
+}
+
+}  // namespace
+
 int qgp_result_uv_mesh_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
                               int32_t* refined_components) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    const qgp::UvMesh uv = qgp::compose_uv_mesh(*session->session, qgp::UvMapKind::IntegerGrid);
+    const qgp::UvMesh& uv = uv_mesh_of(session);
     if (num_vertices) *num_vertices = uv.mesh.num_vertices();
     if (num_triangles) *num_triangles = uv.mesh.num_faces();
     if (refined_components) *refined_components = uv.refined_components;
@@ -433,7 +446,7 @@ int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* tr
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    const qgp::UvMesh m = qgp::compose_uv_mesh(*session->session, qgp::UvMapKind::IntegerGrid);
+    const qgp::UvMesh& m = uv_mesh_of(session);
     if (vertices) std::memcpy(vertices, m.mesh.V.data(), sizeof(double) * 3 * m.mesh.V.rows());
     if (triangles) std::memcpy(triangles, m.mesh.F.data(), sizeof(int32_t) * 3 * m.mesh.F.rows());
     if (uv) std::memcpy(uv, m.uv.data(), sizeof(double) * 2 * m.uv.rows());

@@ -666,17 +666,17 @@ void Session::fill_missing_corner_uvs() {
     const Vec3 e1 = state.mesh.position(state.mesh.F(t, 1)) - a, e2 = state.mesh.position(state.mesh.F(t, 2)) - a;
     const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), det = d11 * d22 - d12 * d12;
     if (!(det > 0)) continue;
+    Vec2 w[3];
+    for (int k = 0; k < 3; ++k)
+      w[k] = Vec2(state.igm->to_double(state.igm->uv[3 * t + k][0]), state.igm->to_double(state.igm->uv[3 * t + k][1]));
     for (int j = 0; j < 3; ++j) {
       if (!std::isnan(corner_uv_[6 * f + 2 * j]) && !std::isnan(corner_uv_[6 * f + 2 * j + 1])) continue;
       // Barycentric coordinates of the corner projected onto the triangle's plane (may be outside).
       const Vec3 r = corner[j] - a;
       const double s1 = (d22 * r.dot(e1) - d12 * r.dot(e2)) / det, s2 = (d11 * r.dot(e2) - d12 * r.dot(e1)) / det;
-      for (int axis = 0; axis < 2; ++axis) {
-        const double u0 = state.igm->to_double(state.igm->uv[3 * t][axis]);
-        const double u1 = state.igm->to_double(state.igm->uv[3 * t + 1][axis]);
-        const double u2 = state.igm->to_double(state.igm->uv[3 * t + 2][axis]);
-        corner_uv_[6 * f + 2 * j + axis] = u0 + s1 * (u1 - u0) + s2 * (u2 - u0);
-      }
+      const Vec2 p = w[0] + s1 * (w[1] - w[0]) + s2 * (w[2] - w[0]);
+      corner_uv_[6 * f + 2 * j] = p.x();
+      corner_uv_[6 * f + 2 * j + 1] = p.y();
     }
   }
 }
