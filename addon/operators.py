@@ -15,7 +15,8 @@ from . import blender_mesh
 from .core import binding, worker
 from .prefs import preferences
 
-# Native sessions per object: reused when only the density changes (re-quantization only).
+# Native sessions per object: reused when only the density changes (re-quantization only, up to
+# 4x in quad count; beyond, the native session solves the seamless map again).
 _session_cache = {}
 
 
@@ -38,7 +39,7 @@ def _new_session(source, isolate):
 
 def _session_for(obj, source, sharp_angle, isolate):
     """A native session for this geometry and feature setup, cached per object: quad remesh and
-    grid UVs share its stages, and a new density only re-quantizes."""
+    grid UVs share its stages, and a new density only re-quantizes (up to 4x)."""
     key = obj.name
     settings = (source.fingerprint(), sharp_angle, isolate)
     cached = _session_cache.get(key)

@@ -265,7 +265,11 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
 void Session::run_seamless_stage(Progress& progress) {
   const double edge_length = target_edge_length();
   for_each_component("seamless_map", progress, [&](size_t, ComponentState& state) {
-    if (state.seamless) return;  // a new density only rescales the quantization
+    if (state.seamless) {
+      const double rescale = state.seamless_edge_length / edge_length;
+      if (std::max(rescale, 1 / rescale) <= kMaxSeamlessRescale * (1 + 1e-9)) return;  // re-quantized only
+      state.seamless.reset();
+    }
     SeamlessMapOptions options;
     options.edge_length = edge_length;
     state.seamless = compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress);

@@ -40,8 +40,8 @@ struct ComponentState {
   int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)
   std::optional<CrossField> field;  // stage 1a (cached until features / sharp angle change)
   std::optional<CutGraph> cut;      // stage 1b
-  std::optional<SeamlessMap> seamless;  // stage 1c: 1 uv unit = seamless_edge_length; computed
-  double seamless_edge_length = 0;      // once, a new density only changes the quantization scale
+  std::optional<SeamlessMap> seamless;  // stage 1c: 1 uv unit = seamless_edge_length; a new density
+  double seamless_edge_length = 0;      // only changes the quantization scale (up to kMaxSeamlessRescale)
   // Stage 2: the seamless map made exact (features and boundary on exact isolines) and its T-mesh.
   std::vector<char> isoline_edges;      // #E: feature and boundary edges kept as isolines
   std::optional<ExactParametrization> exact_seamless;
@@ -70,6 +70,10 @@ struct ComponentState {
 // A remesh job at a new density keeps a decimated working mesh until the density needs a budget
 // more than this many times the one it was made for.
 constexpr int kMaxWorkingBudgetGrowth = 4;
+// ... and its seamless map until the target edge length is more than this many times shorter or
+// longer than the one the map was solved for (rescaled further, the solver's tolerances no longer
+// match the grid and results drift from a fresh run's).
+constexpr double kMaxSeamlessRescale = 2;
 constexpr int kMaxFoldRounds = 8;  // re-quantizations against a folding layout
 
 class Session {
