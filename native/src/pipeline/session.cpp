@@ -629,20 +629,13 @@ void Session::run_quad_stage(Progress& progress) {
   }
 }
 
-void Session::fill_missing_corner_uvs() {
+void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from) {
   // Corners the per-vertex matching left NaN: those of input triangles intake removed (zero-area,
   // needles, caps), and those whose input vertex a needle's collapse merged away. They get the map of
   // the triangle made from their input triangle, else of the one nearest its centroid, extended
   // affinely: one chart, a (nearly) degenerate uv triangle where the 3D one is. Triangles of
   // components remeshed on a decimated working mesh stay NaN (their map is not on these triangles).
-  std::vector<std::pair<int, int>> made_from(input_.num_faces(), {-1, -1});  // (component, face)
   std::vector<std::unique_ptr<TriangleBvh>> bvh(components_.size());
-  for (size_t c = 0; c < components_.size(); ++c) {
-    const ComponentState& state = components_[c];
-    if (state.full_mesh || !state.igm) continue;
-    for (int f = 0; f < state.mesh.num_faces(); ++f)
-      made_from[intake_->input_face[state.face_map[f]]] = {static_cast<int>(c), f};
-  }
   std::vector<char> kept(input_.num_faces(), 0);
   for (int f : intake_->input_face) kept[f] = 1;
   for (int f = 0; f < input_.num_faces(); ++f) {
@@ -691,7 +684,9 @@ void Session::collect_results(Job job, Progress& progress) {
   // split by the pipeline share their corners with the input triangle).
   corner_uv_.assign(static_cast<size_t>(input_.num_faces()) * 6, std::numeric_limits<double>::quiet_NaN());
   std::set<std::array<int, 2>> cuts;
-  for (const ComponentState& state : components_) {
+  std::vector<std::pair<int, int>> made_from(input_.num_faces(), {-1, -1});  // (component, face)
+  for (size_t c = 0; c < components_.size(); ++c) {
+    const ComponentState& state = components_[c];
     if (state.full_mesh) continue;  // the map lives on the working mesh, not on the input triangles
     const ExactParametrization& igm = *state.igm;
     auto input_vertex = [&](int v) {
@@ -700,6 +695,7 @@ void Session::collect_results(Job job, Progress& progress) {
     };
     for (int f = 0; f < state.mesh.num_faces(); ++f) {
       const int input_face = intake_->input_face[state.face_map[f]];
+      made_from[input_face] = {static_cast<int>(c), f};
       if (input_.face_size(input_face) != 3) continue;
       for (int k = 0; k < 3; ++k) {
         const int iv = input_vertex(state.mesh.F(f, k));
@@ -722,7 +718,7 @@ void Session::collect_results(Job job, Progress& progress) {
     }
   }
   cut_edges_.assign(cuts.begin(), cuts.end());
-  fill_missing_corner_uvs();
+  fill_missing_corner_uvs(made_from);
   if (job != Job::Remesh) return;
 
   Timer timer;

@@ -121,7 +121,8 @@ class Session {
   // The fallback cell map of a component whose integer-grid map is not valid (paper §7.1.1).
   void run_cell_map(ComponentState& state, Progress& progress);
   void run_quad_stage(Progress& progress);
-  void fill_missing_corner_uvs();
+  // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
+  void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
   void collect_results(Job job, Progress& progress);
   // Runs body(c, state) for every component inside progress stage `stage`, each with its share
   // of the progress (by face count); records timings_s[stage]; a failure names the component.
