@@ -83,6 +83,17 @@ struct StageCounter {
   }
 };
 
+// Sets the target quad count and sharp angle, then runs `job`, which must complete.
+void run_completed(Session& session, Job job, double target, double sharp_angle = -1, Progress* progress = nullptr) {
+  RemeshOptions options;
+  options.target_faces = target;
+  options.sharp_angle_deg = sharp_angle;
+  session.set_options(options);
+  Progress plain;
+  std::string message;
+  ASSERT_EQ(run_job(session, job, progress ? *progress : plain, &message), kCompleted) << message;
+}
+
 TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   Session session(read_mesh_file(test::mesh_path("spot.obj")));
   RemeshOptions options;
@@ -144,22 +155,13 @@ TEST(SessionPipeline, NewDensityOnlyRequantizes) {
 // map again (the field stays): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at 8000
 // does (rescaled by 4 it had 6 658 quads and 1.35 % Hausdorff distance instead of 6 526 and 0.83 %).
 TEST(SessionPipeline, LargeDensityChangeSolvesTheSeamlessMapAgain) {
-  auto run = [](Session& session, double target, StageCounter* counter) {
-    RemeshOptions options;
-    options.target_faces = target;
-    options.sharp_angle_deg = 40;
-    session.set_options(options);
-    Progress plain;
-    Progress progress = counter ? counter->progress() : plain;
-    std::string message;
-    EXPECT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
-  };
   Session fresh(read_mesh_file(test::mesh_path("block.obj")));
-  run(fresh, 8000, nullptr);
+  ASSERT_NO_FATAL_FAILURE(run_completed(fresh, Job::Remesh, 8000, 40));
   Session session(read_mesh_file(test::mesh_path("block.obj")));
-  run(session, 500, nullptr);
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 500, 40));
   StageCounter counter;
-  run(session, 8000, &counter);
+  Progress counted = counter.progress();
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 8000, 40, &counted));
   EXPECT_EQ(counter.updates["cross_field"], 0);
   EXPECT_GT(counter.updates["seamless_map"], 0);
   EXPECT_EQ(session.report()["seamless"]["edge_length"], fresh.report()["seamless"]["edge_length"]);
@@ -251,12 +253,7 @@ TEST(SessionPipeline, GridUvJobGivesIntegerSeamsAndNoQuads) {
 // map of the nearest kept triangle at their corners, so a texture shows no stray (0, 0) corners.
 TEST(SessionPipeline, GridUvsCoverTrianglesIntakeRemoved) {
   Session session(read_mesh_file(test::mesh_path("block.obj")));
-  RemeshOptions options;
-  options.target_faces = 500;
-  session.set_options(options);
-  Progress progress;
-  std::string message;
-  ASSERT_EQ(run_job(session, Job::GridUV, progress, &message), kCompleted) << message;
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::GridUV, 500));
   const PolygonSoup& in = session.input();
   std::vector<char> kept(in.num_faces(), 0);
   for (int f : session.intake()->input_face) kept[f] = 1;
