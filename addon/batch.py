@@ -101,7 +101,7 @@ def target_kwargs(args):
 
 
 def process(binding, path, args):
-    entry = {"input": path, "status": "ok", "reason": "", "quads": 0, "seconds": 0.0}
+    entry = {"input": path, "status": "ok", "reason": "", "quads": 0, "flipped_quads": 0, "seconds": 0.0}
     start = time.perf_counter()
     try:
         source = import_mesh(binding, path)
@@ -112,6 +112,8 @@ def process(binding, path, args):
         if result is source or not result.name.startswith(name + "_quads"):
             raise RuntimeError("the operator did not create a quad object")
         entry["quads"] = len(result.data.polygons)
+        # The operator selects the quads that face against the source surface.
+        entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
         write_obj(os.path.join(args.out, name + ".obj"), result)
         if args.uv:
             activate(source)
@@ -138,7 +140,7 @@ def main():
     for path in args.inputs:
         entry = process(binding, path, args)
         print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
-              f"{entry['quads']} quads {entry['seconds']} s", flush=True)
+              f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
         entries.append(entry)
     with open(os.path.join(args.out, "report.json"), "w") as f:
         json.dump({"entries": entries, "failed": sum(e["status"] != "ok" for e in entries)}, f, indent=2)

@@ -87,6 +87,34 @@ def create_quad_object(context, source, vertices, quads, quad_triangle, source_m
     return _object_like(context, source, source.name + "_quads", vertices, quads, quad_triangle, source_mesh)
 
 
+def select_faces(mesh, face_ids):
+    """Selects exactly the polygons `face_ids` (with their edges and vertices, so every select mode
+    shows them in Edit Mode) and deselects the rest. Ids out of range are ignored. Returns how many
+    polygons are selected."""
+    ids = np.asarray(face_ids, np.int64).reshape(-1)
+    ids = ids[(ids >= 0) & (ids < len(mesh.polygons))]
+    polygon_flags = np.zeros(len(mesh.polygons), bool)
+    polygon_flags[ids] = True
+    loop_start = np.empty(len(mesh.polygons), np.int32)
+    loop_total = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", loop_start)
+    mesh.polygons.foreach_get("loop_total", loop_total)
+    loops = np.concatenate([np.arange(s, s + n) for s, n in zip(loop_start[ids], loop_total[ids])]) \
+        if len(ids) else np.zeros(0, np.int64)
+    loop_vertex = np.empty(len(mesh.loops), np.int32)
+    loop_edge = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", loop_vertex)
+    mesh.loops.foreach_get("edge_index", loop_edge)
+    vertex_flags = np.zeros(len(mesh.vertices), bool)
+    vertex_flags[loop_vertex[loops]] = True
+    edge_flags = np.zeros(len(mesh.edges), bool)
+    edge_flags[loop_edge[loops]] = True
+    mesh.polygons.foreach_set("select", polygon_flags)
+    mesh.edges.foreach_set("select", edge_flags)
+    mesh.vertices.foreach_set("select", vertex_flags)
+    return int(polygon_flags.sum())
+
+
 def create_grid_uv_object(context, source, vertices, triangles, corner_uv, triangle_source, source_mesh,
                           quads_per_unit, layer_name="QGP Grid"):
     """New object '<source>_grid_uv': the refined triangles of a flip-free integer-grid map

@@ -208,7 +208,15 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         if not self.keep_source_visible:
             self._source_obj.hide_set(True)
         seconds = report.get("timings_s", {}).get("total", time.perf_counter() - self._started)
-        self.report({"INFO"}, f"{obj.name}: {len(quads)} quads in {seconds:.1f} s")
+        message = f"{obj.name}: {len(quads)} quads in {seconds:.1f} s"
+        # Quads that face against the source surface (where it folds within one quad) are selected,
+        # so Edit Mode shows them; everything else is deselected.
+        flipped = blender_mesh.select_faces(obj.data, report.get("quad", {}).get("flipped_quad_ids", []))
+        if flipped:
+            self.report({"WARNING"}, f"{message}; {flipped} quad(s) face against the source surface "
+                                     f"(selected in Edit Mode)")
+        else:
+            self.report({"INFO"}, message)
         return {"FINISHED"}
 
     def draw(self, context):

@@ -250,6 +250,10 @@ void print_remesh_summary(const qgp::Json& report) {
             << q.value("irregular_vertices", 0) << ", min scaled Jacobian " << q.value("min_scaled_jacobian", 0.0)
             << ", " << report["timings_s"].value("total", 0.0) << " s, peak memory "
             << static_cast<long>(report.value("peak_memory_mb", 0.0)) << " MB\n";
+  const int flipped = q.value("flipped_quads", 0);
+  if (flipped > 0)
+    std::cout << "warning: " << flipped << " quad(s) face against the input surface (report: quad.flipped_quad_ids, "
+              << "0-based face order of the output); the surface folds within them\n";
 }
 
 int run(const CommandLine& cl) {

@@ -284,7 +284,38 @@ def test_quad_remesh(binding):
             assert m["sharp_edge_coverage"] > 0.95, m["sharp_edge_coverage"]
             assert m["flipped_quads"] == 0, m["flipped_quads"]
             extra = f", {100 * m['sharp_edge_coverage']:.1f} % of the marked sharp edges covered, no flipped quad"
+        # The operator selects the quads that face against the source, and only those: none here.
+        selected = sum(p.select for p in quad.data.polygons)
+        assert selected == 0, selected
         print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept{extra}")
+
+
+def test_select_faces():
+    """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
+    and vertices; the rest deselected; ids out of range ignored."""
+    blender_mesh = sys.modules[MODULE + ".blender_mesh"]
+    reset_scene()
+    n = 4  # 4 x 4 quads
+    vertices = [(x, y, 0.0) for y in range(n + 1) for x in range(n + 1)]
+    faces = [(y * (n + 1) + x, y * (n + 1) + x + 1, (y + 1) * (n + 1) + x + 1, (y + 1) * (n + 1) + x)
+             for y in range(n) for x in range(n)]
+    mesh = bpy.data.meshes.new("qgp_select_test")
+    mesh.from_pydata(vertices, [], faces)
+    mesh.update(calc_edges=True)
+    for v in mesh.vertices:
+        v.select = True
+    assert blender_mesh.select_faces(mesh, [5, 10, -1, 99]) == 2
+    assert [p.index for p in mesh.polygons if p.select] == [5, 10]
+    want_vertices = set(faces[5]) | set(faces[10])
+    assert {v.index for v in mesh.vertices if v.select} == want_vertices
+    want_edges = {tuple(sorted(k)) for i in (5, 10) for k in mesh.polygons[i].edge_keys}
+    assert {tuple(sorted(e.vertices)) for e in mesh.edges if e.select} == want_edges
+    assert len(want_edges) == 8  # the two quads share a corner, not an edge
+    assert blender_mesh.select_faces(mesh, []) == 0
+    assert not any(p.select for p in mesh.polygons) and not any(v.select for v in mesh.vertices)
+    assert not any(e.select for e in mesh.edges)
+    bpy.data.meshes.remove(mesh)
+    print("select_faces: exactly the listed quads")
 
 
 def grid_seam_residual(mesh, layer, quads_per_unit):
@@ -424,6 +455,8 @@ def test_batch_success():
         (status, proc.stderr[-2000:])
     assert proc.returncode != 0
     # joint at 500 quads: only the refined copy has a flip-free map; its triangles are written.
+    flipped = {os.path.basename(e["input"]): e["flipped_quads"] for e in report["entries"]}
+    assert flipped == {"torus.obj": 0, "truck.obj": 0, "bunny.off": 0, "joint.obj": 0}, flipped
     refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in report["entries"] if e["status"] == "ok"}
     assert refined == {"torus.obj": False, "bunny.off": False, "joint.obj": True}, refined
     joint_uv = [l for l in open(os.path.join(out, "joint_uv.obj")) if l.startswith("f ")]
@@ -445,6 +478,7 @@ def main():
     test_broken_inputs(binding)
     test_cancel_leaves_scene_unchanged(binding)
     test_worker_fault_leaves_blender_running()
+    test_select_faces()
     test_quad_remesh(binding)
     test_grid_uv(binding)
     test_grid_uv_flip_free_copy(binding)

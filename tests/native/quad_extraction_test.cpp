@@ -426,10 +426,24 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   }
   ASSERT_GE(folded, 3);
   const QuadMesh folded_quads = quads;
+  // The metrics name exactly the flipped quads, in order.
+  const QuadMetrics folded_metrics = compute_quad_metrics(folded_quads, cube.mesh, QuadMetricsOptions{}, progress);
+  std::vector<int> flipped_ids;
+  for (int q = 0; q < folded_quads.num_quads(); ++q) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = folded_quads.V.row(folded_quads.Q(q, k)).transpose();
+    if (quad_is_flipped(p, cube.mesh, bvh)) flipped_ids.push_back(q);
+  }
+  EXPECT_FALSE(flipped_ids.empty());
+  EXPECT_EQ(folded_metrics.flipped_quad_ids, flipped_ids);
+  EXPECT_EQ(folded_metrics.flipped_quads, static_cast<int>(flipped_ids.size()));
+  EXPECT_EQ(quad_report_json(folded_metrics)["flipped_quad_ids"].get<std::vector<int>>(), flipped_ids);
   const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
-  EXPECT_GT(stats.flipped_before, 0);
+  EXPECT_EQ(stats.flipped_before, static_cast<int>(flipped_ids.size()));
   EXPECT_EQ(stats.flipped_after, 0);
-  EXPECT_EQ(compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress).flipped_quads, 0);
+  const QuadMetrics untangled_metrics = compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress);
+  EXPECT_EQ(untangled_metrics.flipped_quads, 0);
+  EXPECT_TRUE(untangled_metrics.flipped_quad_ids.empty());
   EXPECT_EQ(quads.Q, folded_quads.Q);
   for (int v = 0; v < quads.num_vertices(); ++v) {
     if (on_cube_edge(v)) EXPECT_EQ(quads.V.row(v), folded_quads.V.row(v)) << v;

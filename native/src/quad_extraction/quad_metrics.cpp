@@ -161,8 +161,9 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
       const double angle = l > 0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) * 180 / M_PI : 0;
       deviations.push_back(std::abs(angle - 90));
     }
-    m.flipped_quads += quad_is_flipped(p, reference, reference_bvh);
+    if (quad_is_flipped(p, reference, reference_bvh)) m.flipped_quad_ids.push_back(q);
   }
+  m.flipped_quads = static_cast<int>(m.flipped_quad_ids.size());
   if (!deviations.empty()) {
     double sum = 0;
     for (double d : deviations) sum += d;
@@ -214,6 +215,7 @@ Json quad_report_json(const QuadMetrics& m) {
   j["mean_angle_deviation_deg"] = m.mean_angle_deviation;
   j["p95_angle_deviation_deg"] = m.p95_angle_deviation;
   j["flipped_quads"] = m.flipped_quads;
+  j["flipped_quad_ids"] = m.flipped_quad_ids;
   j["hausdorff"] = m.hausdorff;
   j["hausdorff_quads_to_mesh"] = m.hausdorff_quads_to_mesh;
   j["hausdorff_mesh_to_quads"] = m.hausdorff_mesh_to_quads;

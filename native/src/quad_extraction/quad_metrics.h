@@ -50,6 +50,7 @@ struct QuadMetrics {
   double p95_angle_deviation = 0;    // degrees, 95th percentile
   int flipped_quads = 0;             // quad normal (of its diagonals) against the mean reference
                                      // normal at the closest points of five interior points
+  std::vector<int> flipped_quad_ids; // those quads, ascending
   double hausdorff = 0;              // max of the two directions, relative to the bbox diagonal
   double hausdorff_quads_to_mesh = 0;
   double hausdorff_mesh_to_quads = 0;
