@@ -159,12 +159,17 @@ def measure_polygon_mesh(vertices, face_sizes, corners, ref_vertices, ref_triang
     c = np.ascontiguousarray(corners, np.int32)
     rv = np.ascontiguousarray(ref_vertices, np.float64).reshape(-1, 3)
     rt = np.ascontiguousarray(ref_triangles, np.int32).reshape(-1, 3)
-    buffer = ctypes.create_string_buffer(1 << 16)
-    needed = ctypes.c_int64()
-    status = lib.qgp_measure_polygon_mesh(_ptr(v, ctypes.c_double), len(v), _ptr(sizes, ctypes.c_int32), len(sizes),
-                                          _ptr(c, ctypes.c_int32), _ptr(rv, ctypes.c_double), len(rv),
-                                          _ptr(rt, ctypes.c_int32), len(rt), float(sharp_angle), buffer,
-                                          len(buffer), ctypes.byref(needed))
+    needed = ctypes.c_int64(1 << 16)
+    # The JSON lists the flipped quads, so it can outgrow a first guess: the library then says how
+    # many bytes it needs, and the (rare) second call measures again into a buffer that size.
+    for _ in range(2):
+        buffer = ctypes.create_string_buffer(needed.value)
+        status = lib.qgp_measure_polygon_mesh(_ptr(v, ctypes.c_double), len(v), _ptr(sizes, ctypes.c_int32),
+                                              len(sizes), _ptr(c, ctypes.c_int32), _ptr(rv, ctypes.c_double), len(rv),
+                                              _ptr(rt, ctypes.c_int32), len(rt), float(sharp_angle), buffer,
+                                              len(buffer), ctypes.byref(needed))
+        if status == OK or needed.value <= len(buffer):
+            break
     if status != OK:
         raise QGPError(status, lib.qgp_last_error().decode())
     return json.loads(buffer.value.decode())

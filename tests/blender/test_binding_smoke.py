@@ -38,6 +38,17 @@ def main():
         raise AssertionError("NaN input must be refused")
     except binding.QGPError as e:
         assert e.code == binding.ERR_INVALID_MESH and "non-finite" in e.message, e.message
+    # A measurement whose JSON outgrows the binding's first buffer: 120 x 120 quads wound against
+    # the plane they lie on, so every quad is flipped and listed.
+    n = 120
+    grid = [(x, y, 0.0) for y in range(n + 1) for x in range(n + 1)]
+    quads = [(y * (n + 1) + x, (y + 1) * (n + 1) + x, (y + 1) * (n + 1) + x + 1, y * (n + 1) + x + 1)
+             for y in range(n) for x in range(n)]
+    plane = [(0, 0, 0), (n, 0, 0), (n, n, 0), (0, n, 0)]
+    m = binding.measure_polygon_mesh(grid, [4] * len(quads), [i for q in quads for i in q], plane,
+                                     [(0, 1, 2), (0, 2, 3)])
+    assert m["flipped_quads"] == n * n and m["flipped_quad_ids"] == list(range(n * n)), m["flipped_quads"]
+    print("measurement: all", n * n, "reversed quads flipped and listed")
     print("binding smoke test: OK")
 
 
