@@ -95,12 +95,13 @@ def select_faces(mesh, face_ids):
     ids = ids[(ids >= 0) & (ids < len(mesh.polygons))]
     polygon_flags = np.zeros(len(mesh.polygons), bool)
     polygon_flags[ids] = True
+    # Each polygon's loops are the block loop_start .. loop_start + loop_total.
     loop_start = np.empty(len(mesh.polygons), np.int32)
     loop_total = np.empty(len(mesh.polygons), np.int32)
     mesh.polygons.foreach_get("loop_start", loop_start)
     mesh.polygons.foreach_get("loop_total", loop_total)
-    loops = np.concatenate([np.arange(s, s + n) for s, n in zip(loop_start[ids], loop_total[ids])]) \
-        if len(ids) else np.zeros(0, np.int64)
+    order = np.argsort(loop_start)
+    loops = polygon_flags[np.repeat(order, loop_total[order])]  # per loop: its polygon is selected
     loop_vertex = np.empty(len(mesh.loops), np.int32)
     loop_edge = np.empty(len(mesh.loops), np.int32)
     mesh.loops.foreach_get("vertex_index", loop_vertex)

@@ -79,14 +79,14 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         const PolygonMeshMetrics after = measure_polygon_mesh(test::polygon_soup(untangled), state.mesh, -1, progress);
         std::cout << name << " | " << target << " | " << quads.num_quads() << " | " << layout.stats.collapsed_cells
                   << " | " << layout.stats.merged_points << " (walk failures " << layout.stats.walk_failures << ") | "
-                  << m.quad.irregular_vertices << " | " << m.quad.flipped_quads << " | " << m.quad.min_scaled_jacobian
+                  << m.quad.irregular_vertices << " | " << m.quad.flipped_quads() << " | " << m.quad.min_scaled_jacobian
                   << " | " << m.quad.mean_angle_deviation << " | " << m.quad.hausdorff << " | " << layout.stats.seconds
-                  << " | " << after.quad.flipped_quads << " | " << after.quad.hausdorff << " | "
+                  << " | " << after.quad.flipped_quads() << " | " << after.quad.hausdorff << " | "
                   << untangle.moved_vertices << " | " << untangle.seconds << std::endl;
-        if (!known_flips(name)) EXPECT_EQ(m.quad.flipped_quads, 0) << where;
-        EXPECT_EQ(untangle.flipped_before, m.quad.flipped_quads) << where;
-        EXPECT_EQ(untangle.flipped_after, after.quad.flipped_quads) << where;
-        EXPECT_LE(after.quad.flipped_quads, allowed_flips_after_untangle(name)) << where;
+        if (!known_flips(name)) EXPECT_EQ(m.quad.flipped_quads(), 0) << where;
+        EXPECT_EQ(untangle.flipped_before, m.quad.flipped_quads()) << where;
+        EXPECT_EQ(untangle.flipped_after, after.quad.flipped_quads()) << where;
+        EXPECT_LE(after.quad.flipped_quads(), allowed_flips_after_untangle(name)) << where;
         EXPECT_EQ(untangled.Q, quads.Q) << where;
         const std::vector<double> reach = mean_edge_length(quads);
         const TriangleBvh bvh(state.mesh);

@@ -324,7 +324,7 @@ QuadExtraction extract_and_check(const std::string& label, const TriMesh& mesh, 
   QuadMetricsOptions mo;
   mo.hausdorff = false;
   const QuadMetrics m = compute_quad_metrics(q, mesh, mo, progress);
-  if (check_flips) EXPECT_EQ(m.flipped_quads, 0);
+  if (check_flips) EXPECT_EQ(m.flipped_quads(), 0);
   EXPECT_EQ(m.irregular_vertices, s.singular_vertices);
   return r;
 }
@@ -436,13 +436,13 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   }
   EXPECT_FALSE(flipped_ids.empty());
   EXPECT_EQ(folded_metrics.flipped_quad_ids, flipped_ids);
-  EXPECT_EQ(folded_metrics.flipped_quads, static_cast<int>(flipped_ids.size()));
+  EXPECT_EQ(folded_metrics.flipped_quads(), static_cast<int>(flipped_ids.size()));
   EXPECT_EQ(quad_report_json(folded_metrics)["flipped_quad_ids"].get<std::vector<int>>(), flipped_ids);
   const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
   EXPECT_EQ(stats.flipped_before, static_cast<int>(flipped_ids.size()));
   EXPECT_EQ(stats.flipped_after, 0);
   const QuadMetrics untangled_metrics = compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress);
-  EXPECT_EQ(untangled_metrics.flipped_quads, 0);
+  EXPECT_EQ(untangled_metrics.flipped_quads(), 0);
   EXPECT_TRUE(untangled_metrics.flipped_quad_ids.empty());
   EXPECT_EQ(quads.Q, folded_quads.Q);
   for (int v = 0; v < quads.num_vertices(); ++v) {
@@ -492,7 +492,7 @@ TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
   const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
   EXPECT_GE(stats.flipped_before, 1);
   EXPECT_EQ(stats.flipped_after, 0);
-  EXPECT_EQ(compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress).flipped_quads, 0);
+  EXPECT_EQ(compute_quad_metrics(quads, cube.mesh, QuadMetricsOptions{}, progress).flipped_quads(), 0);
   EXPECT_NE(quads.V.row(v), folded.V.row(v));
   EXPECT_EQ(extreme_axes(quads, v), extreme_axes(folded, v));
   for (int u = 0; u < quads.num_vertices(); ++u) {
@@ -1042,7 +1042,7 @@ TEST(QuadExtraction, ProjectionOntoAFinerSurface) {
     EXPECT_GE(r.quads.vertex_face[v], 0);
   }
   EXPECT_LT(after.hausdorff_quads_to_mesh, before.hausdorff_quads_to_mesh);
-  EXPECT_EQ(after.flipped_quads, 0);
+  EXPECT_EQ(after.flipped_quads(), 0);
   std::printf("torus 384 quads projected: Hausdorff %.5f -> %.5f of the diagonal\n", before.hausdorff, after.hausdorff);
 }
 

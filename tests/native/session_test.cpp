@@ -45,7 +45,7 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << name;
   EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << name;
   EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << name;
-  EXPECT_EQ(m.quad.flipped_quads, 0) << name;
+  EXPECT_EQ(m.quad.flipped_quads(), 0) << name;
   // Irregular vertices only where the map is singular.
   EXPECT_EQ(test::irregular_vertices_off_singularities(*quads), 0) << name;
   EXPECT_EQ(report["quad"]["faces"], quads->num_quads()) << name;
@@ -83,12 +83,17 @@ struct StageCounter {
   }
 };
 
-// Sets the target quad count and sharp angle, then runs `job`, which must complete.
-void run_completed(Session& session, Job job, double target, double sharp_angle = -1, Progress* progress = nullptr) {
+// Sets the target quad count and sharp angle (the other options at their defaults).
+void set_target(Session& session, double target, double sharp_angle) {
   RemeshOptions options;
   options.target_faces = target;
   options.sharp_angle_deg = sharp_angle;
   session.set_options(options);
+}
+
+// Sets the target quad count and sharp angle, then runs `job`, which must complete.
+void run_completed(Session& session, Job job, double target, double sharp_angle = -1, Progress* progress = nullptr) {
+  set_target(session, target, sharp_angle);
   Progress plain;
   std::string message;
   ASSERT_EQ(run_job(session, job, progress ? *progress : plain, &message), kCompleted) << message;
@@ -360,10 +365,7 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
   for (const auto& [name, sharp] : meshes) {
     Session session(read_mesh_file(test::mesh_path(name)));
     for (double target : targets) {
-      RemeshOptions options;
-      options.target_faces = target;
-      options.sharp_angle_deg = sharp;
-      session.set_options(options);
+      set_target(session, target, sharp);
       Progress progress;
       std::string message;
       const ErrorCode code = run_job(session, Job::Remesh, progress, &message);

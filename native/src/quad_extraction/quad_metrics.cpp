@@ -163,7 +163,6 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
     }
     if (quad_is_flipped(p, reference, reference_bvh)) m.flipped_quad_ids.push_back(q);
   }
-  m.flipped_quads = static_cast<int>(m.flipped_quad_ids.size());
   if (!deviations.empty()) {
     double sum = 0;
     for (double d : deviations) sum += d;
@@ -214,7 +213,7 @@ Json quad_report_json(const QuadMetrics& m) {
   j["min_scaled_jacobian"] = m.min_scaled_jacobian;
   j["mean_angle_deviation_deg"] = m.mean_angle_deviation;
   j["p95_angle_deviation_deg"] = m.p95_angle_deviation;
-  j["flipped_quads"] = m.flipped_quads;
+  j["flipped_quads"] = m.flipped_quads();
   j["flipped_quad_ids"] = m.flipped_quad_ids;
   j["hausdorff"] = m.hausdorff;
   j["hausdorff_quads_to_mesh"] = m.hausdorff_quads_to_mesh;

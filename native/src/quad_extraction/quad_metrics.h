@@ -48,9 +48,10 @@ struct QuadMetrics {
   double min_scaled_jacobian = 1;    // over all quad corners, w.r.t. the quad's own normal
   double mean_angle_deviation = 0;   // degrees, |corner angle - 90| over all corners
   double p95_angle_deviation = 0;    // degrees, 95th percentile
-  int flipped_quads = 0;             // quad normal (of its diagonals) against the mean reference
-                                     // normal at the closest points of five interior points
-  std::vector<int> flipped_quad_ids; // those quads, ascending
+  std::vector<int> flipped_quad_ids;  // ascending: quads whose normal (of the diagonals) points against
+                                      // the mean reference normal at the closest points of five
+                                      // interior points
+  int flipped_quads() const { return static_cast<int>(flipped_quad_ids.size()); }
   double hausdorff = 0;              // max of the two directions, relative to the bbox diagonal
   double hausdorff_quads_to_mesh = 0;
   double hausdorff_mesh_to_quads = 0;
