@@ -196,14 +196,15 @@ void write_uv_output(const std::string& path, const qgp::Session& session, qgp::
     header << "qgp integer-grid map: per-corner vt, 1 uv unit = 1 quad";
   else
     header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
-           << session.components()[0].seamless_edge_length << " model units";
+           << session.components()[0].seamless_edge_length() << " model units";
   qgp::cli::write_obj(path, out.mesh, &out.uv, header.str());
 }
 
 // --layout-out: the T-mesh (motorcycle graph) of every component as OBJ polylines.
 bool has_layout(const qgp::Session& session) {
   bool complete = !session.components().empty();
-  for (const auto& c : session.components()) complete = complete && c.tmesh.has_value();
+  for (const auto& c : session.components())
+    complete = complete && c.seamless_is_current() && c.traced.computed_from(c.seamless.id());
   return complete;
 }
 
@@ -212,7 +213,7 @@ void write_layout_output(const std::string& path, const qgp::Session& session) {
   std::vector<const qgp::TMesh*> tmeshes;
   for (const auto& c : session.components()) {
     meshes.push_back(&c.mesh);
-    tmeshes.push_back(&*c.tmesh);
+    tmeshes.push_back(&c.traced->tmesh);
   }
   qgp::write_layout_obj(path, meshes, tmeshes);
 }

@@ -23,6 +23,8 @@
 #include "cut_graph/cut_graph.h"
 #include "igm/integer_grid_map.h"
 #include "intake/intake.h"
+#include "pipeline/component_state.h"
+#include "pipeline/policy.h"
 #include "pipeline/split_faces.h"
 #include "quad_extraction/quad_extraction.h"
 #include "quantization/quantization.h"
@@ -90,11 +92,24 @@ Chain run_chain(TriMesh mesh, double sharp_angle, double seamless_quads, double 
   return c;
 }
 
-IntegerGridMap run_igm(const Chain& c, IgmOptions options = {}) {
-  options.edge_length = c.edge_length;
+// The chain's results as the pipeline holds them for one component.
+ComponentState component_of(const Chain& c) {
+  ComponentState s;
+  s.mesh = c.mesh;
+  s.field.store({}, c.field);
+  s.cut.store(s.field.id(), c.cut);
+  s.seamless.store({s.cut.id(), c.edge_length}, c.seamless);
+  s.traced.store(s.seamless.id(), TracedMap{c.field.feature_edge, c.sanitized, c.tmesh});
+  Quantized q;
+  q.result = c.quantization;
+  s.quantization.store({s.traced.id(), c.quantization.scale, Quantizer::Greedy}, q);
+  return s;
+}
+
+// The pipeline's integer-grid map with every attempt the policy has (as for grid UVs).
+IgmResult run_igm(const Chain& c) {
   Progress progress;
-  return compute_integer_grid_map(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options,
-                                  progress);
+  return solve_integer_grid_map(component_of(c), true, progress);
 }
 
 // Largest distance of a translation component from a multiple of one() (grid units).
@@ -171,9 +186,9 @@ Figures check_chain(const std::string& name, int target, const Chain& c, bool fe
   fig.faces = c.mesh.num_faces();
   fig.quads_expected = c.quantization.quads_expected;
   fig.seconds_before = c.seconds_before;
-  const IntegerGridMap igm = run_igm(c);
+  const IgmResult igm = run_igm(c);
   fig.stats = igm.stats;
-  const ExactParametrization& p = igm.param;
+  const ExactParametrization& p = igm.map;
   EXPECT_EQ(exact_transition_residual(c.mesh, p), 0);
   EXPECT_EQ(translation_off_integer(c.mesh, p), 0);
   for (int h = 0; h < c.mesh.num_halfedges(); ++h) EXPECT_EQ(p.rotation[h], c.seamless.param.rotation[h]);
@@ -243,8 +258,8 @@ TEST(Igm, SmallRealMeshes) {
 
 TEST(Igm, ReportHasTheIssueFields) {
   const Chain c = run_chain(test::make_grid_cube(4).mesh, 40, 96, 96);
-  const IntegerGridMap igm = run_igm(c);
-  const Json j = igm_report(igm.stats);
+  const IgmResult igm = run_igm(c);
+  const Json j = igm.stats;
   for (const char* key : {"flipped_triangles", "degenerate_triangles", "max_integer_residual", "fallback_used",
                           "penalty_iterations", "seconds"})
     EXPECT_TRUE(j.contains(key)) << key;
@@ -325,7 +340,8 @@ TEST(Igm, CancelStopsWithCancelledError) {
   IgmOptions options;
   options.edge_length = c.edge_length;
   try {
-    compute_integer_grid_map(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options, progress);
+    IntegerGridMapSolver solver(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options, progress);
+    solver.solve(IgmAttempt::Default, 0, 1);
     ADD_FAILURE() << "no exception";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::Cancelled);

@@ -71,10 +71,10 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
   // Field: Poincare-Hopf per component.
   EXPECT_EQ(state.field->index_sum, 4 * info.euler_characteristic) << where;
   // Seamless map: exact-enough transitions, no flips.
-  const double diag = state.mesh.bounding_box_diagonal() / state.seamless_edge_length;
+  const double diag = state.mesh.bounding_box_diagonal() / state.seamless_edge_length();
   EXPECT_LE(state.seamless->stats.max_transition_residual, 1e-9 * std::max(1.0, diag)) << where;
   // T-mesh: every singularity is a node, four-sided cells, Euler characteristic, exact walls.
-  const TMesh& tm = *state.tmesh;
+  const TMesh& tm = state.traced->tmesh;
   const Json& tr = report["tmesh"]["components"][c];
   EXPECT_EQ(singularities_without_node(*state.field, tm), 0) << where;
   EXPECT_EQ(tr["cells_not_four_sided"], 0) << where;
@@ -89,12 +89,12 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
     // slivers between two feature edges); those are the only gaps, and rare.
     for (char f : state.feature_edges) features += f;
     uncovered = uncovered_wall_edges(state.mesh, state.feature_edges, tm);
-    EXPECT_EQ(uncovered_wall_edges(state.mesh, state.isoline_edges, tm), 0) << where << ": walls not covered by T-edges";
+    EXPECT_EQ(uncovered_wall_edges(state.mesh, state.traced->isoline_edges, tm), 0) << where << ": walls not covered by T-edges";
     EXPECT_EQ(uncovered, dropped) << where;
     EXPECT_LE(dropped, 0.01 * features) << where;
   }
   // Quantization: Ax = 0 exactly, x >= 0, valid, objective never increasing.
-  const QuantizationResult& q = *state.quantization;
+  const QuantizationResult& q = state.quantization->result;
   EXPECT_TRUE(q.valid) << where << ": " << q.invalid_reason;
   EXPECT_EQ(q.consistency_residual, 0) << where;
   EXPECT_EQ(quantization_consistency_residual(tm, q.x), 0) << where;

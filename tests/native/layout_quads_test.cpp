@@ -12,7 +12,7 @@
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 #include "quad_extraction/layout_quads.h"
-#include "quad_extraction/polygon_metrics.h"
+#include "metrics/polygon_metrics.h"
 #include "quad_extraction/untangle_quads.h"
 #include "test_support.h"
 
@@ -68,9 +68,9 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         const std::string where = name + " component " + std::to_string(c) + " at " + std::to_string(int(target));
         Progress progress;
         const LayoutQuads layout =
-            extract_layout_quads(state.mesh, *state.exact_seamless, *state.tmesh, state.quantization->x, progress);
+            extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, state.quantization->result.x, progress);
         const QuadMesh& quads = layout.quads;
-        EXPECT_EQ(quads.num_quads(), state.quantization->quads_expected) << where;
+        EXPECT_EQ(quads.num_quads(), state.quantization->result.quads_expected) << where;
         const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(quads), state.mesh, -1, progress);
         // The untangle step, as the session runs it: bounded moves on the surface, same connectivity.
         QuadMesh untangled = quads;

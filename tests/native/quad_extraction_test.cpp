@@ -18,7 +18,7 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "quad_extraction/quad_extraction.h"
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
 #include "quad_extraction/untangle_quads.h"
 #include "igm/integer_grid_map.h"
@@ -437,7 +437,7 @@ TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   EXPECT_FALSE(flipped_ids.empty());
   EXPECT_EQ(folded_metrics.flipped_quad_ids, flipped_ids);
   EXPECT_EQ(folded_metrics.flipped_quads(), static_cast<int>(flipped_ids.size()));
-  EXPECT_EQ(quad_report_json(folded_metrics)["flipped_quad_ids"].get<std::vector<int>>(), flipped_ids);
+  EXPECT_EQ(Json(folded_metrics)["flipped_quad_ids"].get<std::vector<int>>(), flipped_ids);
   const UntangleStats stats = untangle_flipped_quads(quads, cube.mesh, sharp, progress);
   EXPECT_EQ(stats.flipped_before, static_cast<int>(flipped_ids.size()));
   EXPECT_EQ(stats.flipped_after, 0);
@@ -1075,14 +1075,14 @@ TEST(QuadExtraction, MetricsAndReport) {
   EXPECT_GT(m.mean_angle_deviation, 0);
   EXPECT_GE(m.p95_angle_deviation, m.mean_angle_deviation * 0.5);
   EXPECT_LT(m.hausdorff, 0.05);
-  const Json j = quad_report_json(m);
+  const Json j = m;
   EXPECT_EQ(j["faces"].get<int>(), 384);
   EXPECT_EQ(j["vertices"].get<int>(), 384);
   EXPECT_EQ(j["irregular_vertices"].get<int>(), 0);
   for (const char* key : {"min_scaled_jacobian", "mean_angle_deviation_deg", "p95_angle_deviation_deg",
                           "flipped_quads", "hausdorff"})
     EXPECT_TRUE(j.contains(key)) << key;
-  const Json s = quad_extraction_stats_json(r.stats);
+  const Json s = r.stats;
   EXPECT_EQ(s["expected_quads"].get<int64_t>(), 384);
 }
 

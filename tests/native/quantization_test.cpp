@@ -709,8 +709,8 @@ TEST(RoundQuantization, TracerFailureCountsAsInvalidWithTheReason) {
   EXPECT_EQ(traced, 1);
   EXPECT_FALSE(r.quantization.valid);
   EXPECT_NE(r.quantization.invalid_reason.find("test tracer refuses"), std::string::npos);
-  EXPECT_EQ(quantization_report(r.quantization)["method"], "round");
-  EXPECT_TRUE(quantization_report(r.quantization)["objective"].is_null());
+  EXPECT_EQ(Json(r.quantization)["method"], "round");
+  EXPECT_TRUE(Json(r.quantization)["objective"].is_null());
 }
 
 TEST(RoundQuantization, LengthsAreReadOffTheRetracedTMesh) {
@@ -754,7 +754,7 @@ TEST(Quantization, ScaleHelpers) {
 
 TEST(Quantization, ReportHasTheIssueFields) {
   const TMesh tm = single_t_junction(13, 31, 14, 28);
-  const Json j = quantization_report(run_greedy(tm, 1.0));
+  const Json j = run_greedy(tm, 1.0);
   for (const char* key : {"method", "scale", "valid", "objective", "zero_edges", "stage1_steps", "stage2_steps",
                           "consistency_residual", "quads_expected", "seconds"})
     EXPECT_TRUE(j.contains(key)) << key;

@@ -17,7 +17,7 @@
 #include "intake/read_mesh_file.h"
 #include "intake/working_mesh.h"
 #include "pipeline/session.h"
-#include "quad_extraction/polygon_metrics.h"
+#include "metrics/polygon_metrics.h"
 #include "quad_extraction/surface_projection.h"
 #include "test_support.h"
 

@@ -12,7 +12,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "intake/read_mesh_file.h"
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 
 namespace qgp::test {
 

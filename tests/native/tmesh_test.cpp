@@ -709,8 +709,8 @@ void session_tmesh_cases(const std::string& name, double sharp_angle_deg) {
   ASSERT_EQ(error, "") << name;
   for (size_t k = 0; k < session.components().size(); ++k) {
     const ComponentState& state = session.components()[k];
-    Case c{name + (sharp_angle_deg > 0 ? " features" : ""), state.mesh, *state.exact_seamless, state.isoline_edges};
-    const TMesh& tm = *state.tmesh;
+    Case c{name + (sharp_angle_deg > 0 ? " features" : ""), state.mesh, state.traced->exact, state.traced->isoline_edges};
+    const TMesh& tm = state.traced->tmesh;
     const TMeshCheck check = check_tmesh(tm);
     std::printf("[session tmesh] %-32s %7d triangles, %4d singularities -> %6zu nodes %6zu edges %6zu cells, "
                 "%5d T-junctions, trace %.3f s\n",
@@ -811,7 +811,7 @@ TEST(TMesh, CellSystemAndReport) {
     EXPECT_GE(nnz, 1);
     EXPECT_LE(nnz, 2);
   }
-  const Json j = tmesh_report(tm);
+  const Json j = tm;
   for (const char* key : {"nodes", "edges", "cells", "singular_nodes", "t_junctions", "euler_characteristic",
                           "cells_not_four_sided", "max_cell_equation_residual", "trace_seconds"})
     EXPECT_TRUE(j.contains(key)) << key;

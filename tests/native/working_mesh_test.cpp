@@ -9,7 +9,7 @@
 
 #include "cross_field/cross_field.h"
 #include "intake/working_mesh.h"
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
 #include "test_support.h"
 

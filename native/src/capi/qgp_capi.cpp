@@ -16,7 +16,7 @@
 
 #include "core/error.h"
 #include "intake/read_mesh_file.h"
-#include "quad_extraction/polygon_metrics.h"
+#include "metrics/polygon_metrics.h"
 #include "pipeline/session.h"
 #include "pipeline/uv_mesh.h"
 
@@ -483,7 +483,7 @@ int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const
         qgp::soup_from_triangle_arrays(ref_vertices, num_ref_vertices, ref_triangles, num_ref_triangles),
         qgp::IntakeOptions{}, progress);
     const std::string text =
-        qgp::polygon_metrics_json(qgp::measure_polygon_mesh(mesh, reference.mesh, sharp_angle_deg, progress)).dump();
+        qgp::Json(qgp::measure_polygon_mesh(mesh, reference.mesh, sharp_angle_deg, progress)).dump();
     if (needed) *needed = static_cast<int64_t>(text.size()) + 1;
     require(json != nullptr && json_size > static_cast<int64_t>(text.size()),
             "json buffer too small: " + std::to_string(text.size() + 1) + " bytes needed");

@@ -721,18 +721,5 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
   return map;
 }
 
-Json cell_map_stats_json(const CellMapStats& s) {
-  return {{"vertices", s.vertices},
-          {"faces", s.faces},
-          {"inner_vertices", s.inner_vertices},
-          {"flipped_triangles", s.flipped_triangles},
-          {"degenerate_triangles", s.degenerate_triangles},
-          {"collapsed_cell_triangles", s.collapsed_cell_triangles},
-          {"degenerate_before_opening", s.degenerate_before_opening},
-          {"flipped_before_opening", s.flipped_before_opening},
-          {"opened_vertices", s.opened_vertices},
-          {"wound_vertices", s.wound_vertices},
-          {"seconds", s.seconds}};
-}
 
 }  // namespace qgp

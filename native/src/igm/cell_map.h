@@ -61,6 +61,8 @@ struct CellMapOptions {
 CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
                                 Progress& progress, const CellMapOptions& options = {});
 
-Json cell_map_stats_json(const CellMapStats& stats);
+QGP_JSON_FIELDS(CellMapStats, vertices, faces, inner_vertices, flipped_triangles, degenerate_triangles,
+                collapsed_cell_triangles, degenerate_before_opening, flipped_before_opening, opened_vertices,
+                wound_vertices, seconds)
 
 }  // namespace qgp

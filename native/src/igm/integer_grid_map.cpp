@@ -369,11 +369,12 @@ int64_t exact_parametric_area(const ExactParametrization& param, bool* integral)
   return static_cast<int64_t>(sum / unit);
 }
 
-IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
-                                        const SeamlessMap& seamless, const ExactParametrization& sanitized,
-                                        const TMesh& tmesh, const QuantizationResult& quantization,
-                                        const IgmOptions& options, Progress& progress) {
-  Timer timer;
+namespace {
+
+// Refuses inputs that do not belong together (Error(InvalidArgument) naming what is wrong).
+bool check_inputs(const TriMesh& mesh, const CrossField& field, const CutGraph& cut, const SeamlessMap& seamless,
+                  const ExactParametrization& sanitized, const TMesh& tmesh, const QuantizationResult& quantization,
+                  const IgmOptions& options) {
   const int nf = mesh.num_faces(), nc = 3 * nf, ne = mesh.num_edges();
   if (seamless.param.uv.rows() != nc || static_cast<int>(sanitized.uv.size()) != nc ||
       static_cast<int>(sanitized.rotation.size()) != nc || static_cast<int>(cut.rotation.size()) != nc ||
@@ -404,246 +405,237 @@ IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& f
   for (int h = 0; h < nc; ++h)
     if (sanitized.rotation[h] != seamless.param.rotation[h])
       throw Error(ErrorCode::InvalidArgument, "integer-grid map: the sanitized and the seamless map have different transitions");
+  return true;
+}
 
-  IntegerGridMap result;
-  IgmStats& stats = result.stats;
-  const double scale = quantization.scale;
-  const std::vector<int> cones = cone_quarter_turns(mesh, field);
-  // Flipped and degenerate triangles and wound one-rings: what the escalations try to remove.
-  auto irregular = [&] { return stats.flipped_triangles + stats.degenerate_triangles + stats.winding_defects; };
-
-  // The problem at the quantization's scale: 1 uv unit = one quad edge.
-  ParametrizationProblem problem(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
-                                 options.edge_length / scale);
-  // The seamless map's isolines (it may have left a few more feature edges free).
-  std::vector<char> left_free(mesh.num_edges(), 0);
-  for (int e : seamless.stats.dropped_isoline_edges)
-    if (e >= 0 && e < mesh.num_edges()) left_free[e] = 1;
-  for (const Isoline& line : select_isolines(mesh, field, cut).isolines)
-    if (!left_free[mesh.edge_of[line.halfedge]]) problem.add_isoline(line.halfedge, line.axis);
-
-  // C z = b: paths between singular / corner nodes (tree + loops), and the root at its rounded
-  // position (the first singular node on a mesh vertex, else the first node).
-  int root = 0;
+// The node whose position is fixed (at its rounded position): the first singular node on a mesh
+// vertex, else the first node.
+int root_node(const TMesh& tmesh) {
   for (size_t n = 0; n < tmesh.nodes.size(); ++n)
-    if (tmesh.nodes[n].singular() && tmesh.nodes[n].mesh_vertex >= 0) {
-      root = static_cast<int>(n);
-      break;
-    }
+    if (tmesh.nodes[n].singular() && tmesh.nodes[n].mesh_vertex >= 0) return static_cast<int>(n);
+  return 0;
+}
+
+}  // namespace
+
+const char* igm_attempt_name(IgmAttempt attempt) {
+  switch (attempt) {
+    case IgmAttempt::Default: return "default";
+    case IgmAttempt::RelinearizedPenalty: return "relinearized penalty";
+    case IgmAttempt::AllFaces: return "all faces";
+  }
+  return "?";
+}
+
+IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
+                                           const SeamlessMap& seamless, const ExactParametrization& sanitized,
+                                           const TMesh& tmesh, const QuantizationResult& quantization,
+                                           const IgmOptions& options, Progress& progress)
+    : mesh_(mesh), field_(field), tmesh_(tmesh), options_(options), progress_(progress),
+      inputs_checked_(check_inputs(mesh, field, cut, seamless, sanitized, tmesh, quantization, options)),
+      problem_(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u, options.edge_length / quantization.scale),
+      scale_(quantization.scale), cones_(cone_quarter_turns(mesh, field)) {
+  add_seamless_isolines(seamless, cut);
+  build_path_rows(sanitized, quantization);
+  problem_.set_pin_translation(false);
+  seamless_pose_ = seamless.param;
+  seamless_pose_.uv *= scale_;
+  solve_options_.penalty_weight = options.penalty_weight;
+  solve_options_.max_repair_rounds = options.max_repair_rounds;
+  solve_options_.relinearization_rounds = options.relinearization_rounds;
+}
+
+IntegerGridMapSolver::~IntegerGridMapSolver() = default;
+
+void IntegerGridMapSolver::add_seamless_isolines(const SeamlessMap& seamless, const CutGraph& cut) {
+  // The seamless map's isolines (it may have left a few more feature edges free).
+  std::vector<char> left_free(mesh_.num_edges(), 0);
+  for (int e : seamless.stats.dropped_isoline_edges)
+    if (e >= 0 && e < mesh_.num_edges()) left_free[e] = 1;
+  for (const Isoline& line : select_isolines(mesh_, field_, cut).isolines)
+    if (!left_free[mesh_.edge_of[line.halfedge]]) problem_.add_isoline(line.halfedge, line.axis);
+}
+
+void IntegerGridMapSolver::build_path_rows(const ExactParametrization& sanitized, const QuantizationResult& quantization) {
+  root_ = root_node(tmesh_);
   std::vector<double> lengths(quantization.x.begin(), quantization.x.end());
-  const std::vector<IgmRow> rows = path_rows(mesh, sanitized, tmesh, lengths, root, progress);
-  for (const IgmRow& r : rows)
+  rows_ = path_rows(mesh_, sanitized, tmesh_, lengths, root_, progress_);
+  for (const IgmRow& r : rows_)
     if (r.terms.empty() && std::abs(r.rhs) > 0)
       throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
-  const SurfacePoint& root_point = tmesh.nodes[root].point;
-  auto add_path_constraints = [&]() {
-    problem.clear_linear_constraints();
-    int count = 0;
-    for (const IgmRow& r : rows)
-      if (!r.terms.empty()) problem.add_linear_constraint(r.terms, r.rhs), ++count;
-    const PointExpr e = surface_point_expr(root_point);
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint(e.terms[a], std::round(scale * root_point.uv[a])), ++count;
-    stats.constraints = count;
-  };
-  problem.set_pin_translation(false);
+}
 
-  Timer solve_timer;
-  Parametrization seamless_pose = seamless.param;
-  seamless_pose.uv *= scale;
-  ParametrizationSolveOptions so;
-  so.penalty_weight = options.penalty_weight;
-  so.max_repair_rounds = options.max_repair_rounds;
-  so.relinearization_rounds = options.relinearization_rounds;
-  const RegularityMode repair = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
-  Parametrization pose;
-  std::vector<char> snap_vertices;
-  std::vector<IsolineConstraint> iso;
-  // Penalty phase with re-linearization (§7.1), then the hard solve around the last pose. Hard
-  // phase: the integer quantities that Cz = b determines — positions of the singular and corner
-  // vertices, cut translations, feature/boundary isoline values — rounded from the penalty optimum
-  // (within penalty_tolerance of them) and imposed exactly. Unit coefficients only, so the exact
-  // elimination stays integral (the path rows carry barycentric coefficients).
-  auto solve_global = [&](bool penalty_regularity, double begin, double end) {
-    add_path_constraints();
-    pose = seamless_pose;
-    ParametrizationSolution solution;
-    const int rounds = std::max(1, options.max_penalty_rounds);
-    for (int round = 0; round < rounds; ++round) {
-      so.linear_constraints = ConstraintMode::Penalty;
-      so.regularity = penalty_regularity ? repair : RegularityMode::Off;
-      so.reference = &pose;
-      so.progress_begin = begin + (end - begin) * 0.7 * round / rounds;
-      so.progress_end = begin + (end - begin) * 0.7 * (round + 1) / rounds;
-      solution = problem.solve(so, progress);
-      ++stats.penalty_iterations;
-      stats.ipopt_solves += solution.stats.ipopt_solves;
-      stats.ipopt_iterations += solution.stats.ipopt_iterations;
-      stats.penalty_violation.push_back(solution.stats.constraint_violation);
-      if (penalty_regularity) pose = solution.param;  // the next round is linearized around it
-      // Without regularity the next round would give the same result.
-      if (solution.stats.constraint_violation <= options.penalty_tolerance || !penalty_regularity) break;
-    }
-    const Parametrization& integers = solution.param;
-    snap_vertices = independent_vertices(mesh, integers, tmesh);
-    iso = isoline_constraints(mesh, integers, field.feature_edge, true);
-    problem.clear_linear_constraints();
-    std::vector<char> wedge_done(problem.num_wedges(), 0);
-    for (int c = 0; c < nc; ++c) {
-      const int w = problem.wedge_of_corner()[c];
-      if (!snap_vertices[mesh.F(c / 3, c % 3)] || wedge_done[w]) continue;
-      wedge_done[w] = 1;
-      for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(integers.uv(c, a)));
-    }
-    for (int h = 0; h < nc; ++h) {
-      const int o = mesh.opposite[h];
-      if (o < 0 || o < h || !integers.is_cut[mesh.edge_of[h]]) continue;
-      PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
-      transfer(mesh, integers.rotation, h, t);
-      const Vec2 value = integers.translation(mesh, h);
-      for (int a = 0; a < 2; ++a) problem.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
-    }
-    for (const IsolineConstraint& c : iso)
-      problem.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(integers.uv(c.halfedge, c.axis)));
-    // The hard solve is linearized around the penalty optimum where it is healthy and around the
-    // seamless map elsewhere.
-    const Parametrization penalty_optimum = integers;
-    so.linear_constraints = ConstraintMode::Hard;
-    so.regularity = repair;
-    so.reference = penalty_regularity ? &pose : &seamless_pose;
-    so.progress_begin = begin + (end - begin) * 0.7;
-    so.progress_end = end;
-    solution = problem.solve(so, progress);
-    pose = penalty_optimum;
-    stats.ipopt_solves += solution.stats.ipopt_solves;
-    stats.ipopt_iterations += solution.stats.ipopt_iterations;
-    stats.max_constraint_violation = 0;
-    for (const IgmRow& r : rows) {
-      double value = -r.rhs;
-      for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
-      stats.max_constraint_violation = std::max(stats.max_constraint_violation, std::abs(value));
-    }
-    return solution;
-  };
-  ParametrizationSolution solution = solve_global(options.penalty_regularity, 0, 0.4);
+void IntegerGridMapSolver::add_path_constraints() {
+  problem_.clear_linear_constraints();
+  int count = 0;
+  for (const IgmRow& r : rows_)
+    if (!r.terms.empty()) problem_.add_linear_constraint(r.terms, r.rhs), ++count;
+  const SurfacePoint& root_point = tmesh_.nodes[root_].point;
+  const PointExpr e = surface_point_expr(root_point);
+  for (int a = 0; a < 2; ++a) problem_.add_linear_constraint(e.terms[a], std::round(scale_ * root_point.uv[a])), ++count;
+  stats_.constraints = count;
+}
 
-  // Exact rounding: singular/corner vertices snapped to integers (translations become integral),
-  // feature and boundary edges exact isolines on integer values.
-  SanitizeOptions sanitize;
-  sanitize.fraction_bits = options.fraction_bits;
-  sanitize.snap_bits = 0;
-  sanitize.snap_vertex = snap_vertices;
-  sanitize.snap_corner_axes.assign(nc, 0);
-  for (const IsolineConstraint& c : iso) {
+ParametrizationSolution IntegerGridMapSolver::penalty_phase(bool with_regularity, double begin, double end) {
+  add_path_constraints();
+  pose_ = seamless_pose_;
+  ParametrizationSolution solution;
+  const int rounds = std::max(1, options_.max_penalty_rounds);
+  for (int round = 0; round < rounds; ++round) {
+    solve_options_.linear_constraints = ConstraintMode::Penalty;
+    solve_options_.regularity = with_regularity ? RegularityMode::Repair : RegularityMode::Off;
+    solve_options_.reference = &pose_;
+    solve_options_.progress_begin = begin + (end - begin) * 0.7 * round / rounds;
+    solve_options_.progress_end = begin + (end - begin) * 0.7 * (round + 1) / rounds;
+    solution = problem_.solve(solve_options_, progress_);
+    ++stats_.penalty_iterations;
+    count_solves(solution);
+    stats_.penalty_violation.push_back(solution.stats.constraint_violation);
+    if (with_regularity) pose_ = solution.param;  // the next round is linearized around it
+    // Without regularity the next round would give the same result.
+    if (solution.stats.constraint_violation <= options_.penalty_tolerance || !with_regularity) break;
+  }
+  return solution;
+}
+
+void IntegerGridMapSolver::impose_integers(const Parametrization& integers) {
+  const int nc = mesh_.num_halfedges();
+  snap_vertices_ = independent_vertices(mesh_, integers, tmesh_);
+  isolines_ = isoline_constraints(mesh_, integers, field_.feature_edge, true);
+  problem_.clear_linear_constraints();
+  std::vector<char> wedge_done(problem_.num_wedges(), 0);
+  for (int c = 0; c < nc; ++c) {
+    const int w = problem_.wedge_of_corner()[c];
+    if (!snap_vertices_[mesh_.F(c / 3, c % 3)] || wedge_done[w]) continue;
+    wedge_done[w] = 1;
+    for (int a = 0; a < 2; ++a) problem_.add_linear_constraint({{c, a, 1.0}}, std::round(integers.uv(c, a)));
+  }
+  for (int h = 0; h < nc; ++h) {
+    const int o = mesh_.opposite[h];
+    if (o < 0 || o < h || !integers.is_cut[mesh_.edge_of[h]]) continue;
+    PointExpr t;  // t_h = c_g(w) - R^r c_f(w), w = from(h)
+    transfer(mesh_, integers.rotation, h, t);
+    const Vec2 value = integers.translation(mesh_, h);
+    for (int a = 0; a < 2; ++a) problem_.add_linear_constraint(merge_terms(t.terms[a]), std::round(value[a]));
+  }
+  for (const IsolineConstraint& c : isolines_)
+    problem_.add_linear_constraint({{c.halfedge, c.axis, 1.0}}, std::round(integers.uv(c.halfedge, c.axis)));
+}
+
+ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized_penalty, double begin, double end) {
+  solve_options_.linear_constraints = ConstraintMode::Hard;
+  solve_options_.regularity = RegularityMode::Repair;
+  solve_options_.reference = after_relinearized_penalty ? &pose_ : &seamless_pose_;
+  solve_options_.progress_begin = begin;
+  solve_options_.progress_end = end;
+  ParametrizationSolution solution = problem_.solve(solve_options_, progress_);
+  count_solves(solution);
+  stats_.max_constraint_violation = 0;
+  for (const IgmRow& r : rows_) {
+    double value = -r.rhs;
+    for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
+    stats_.max_constraint_violation = std::max(stats_.max_constraint_violation, std::abs(value));
+  }
+  return solution;
+}
+
+ParametrizationSolution IntegerGridMapSolver::solve_global(bool relinearized_penalty, double begin, double end) {
+  const ParametrizationSolution penalty = penalty_phase(relinearized_penalty, begin, end);
+  impose_integers(penalty.param);
+  // The hard solve is linearized around the penalty optimum where it is healthy and around the
+  // seamless map elsewhere.
+  const Parametrization penalty_optimum = penalty.param;
+  ParametrizationSolution solution = hard_solve(relinearized_penalty, begin + (end - begin) * 0.7, end);
+  pose_ = penalty_optimum;
+  return solution;
+}
+
+ParametrizationSolution IntegerGridMapSolver::solve_all_faces(double begin, double end) {
+  Parametrization seamless_pose = seamless_pose_;
+  solve_options_.regularity = RegularityMode::AllFaces;
+  solve_options_.reference = &seamless_pose;
+  solve_options_.progress_begin = begin;
+  solve_options_.progress_end = end;
+  const ParametrizationSolution all = problem_.solve(solve_options_, progress_);
+  count_solves(all);
+  return all;
+}
+
+void IntegerGridMapSolver::count_solves(const ParametrizationSolution& solution) {
+  stats_.ipopt_solves += solution.stats.ipopt_solves;
+  stats_.ipopt_iterations += solution.stats.ipopt_iterations;
+}
+
+void IntegerGridMapSolver::set_snapping(const std::vector<char>& snap_vertices,
+                                        const std::vector<IsolineConstraint>& isolines) {
+  sanitize_.fraction_bits = options_.fraction_bits;
+  sanitize_.snap_bits = 0;
+  sanitize_.snap_vertex = snap_vertices;
+  sanitize_.snap_corner_axes.assign(mesh_.num_halfedges(), 0);
+  for (const IsolineConstraint& c : isolines) {
     const int f = c.halfedge / 3, k = c.halfedge % 3;
-    sanitize.snap_corner_axes[3 * f + k] |= uint8_t(1 << c.axis);
-    sanitize.snap_corner_axes[3 * f + (k + 1) % 3] |= uint8_t(1 << c.axis);
+    sanitize_.snap_corner_axes[3 * f + k] |= uint8_t(1 << c.axis);
+    sanitize_.snap_corner_axes[3 * f + (k + 1) % 3] |= uint8_t(1 << c.axis);
   }
-  // Distance from integers of what snapping rounds.
-  auto integer_residual = [&](const Parametrization& map) {
-    double worst = 0;
-    for (int c = 0; c < nc; ++c) {
-      const int v = mesh.F(c / 3, c % 3);
-      for (int a = 0; a < 2; ++a)
-        if (snap_vertices[v] || ((sanitize.snap_corner_axes[c] >> a) & 1))
-          worst = std::max(worst, distance_to_integer(map.uv(c, a)));
-    }
-    for (int h = 0; h < nc; ++h) {
-      if (mesh.opposite[h] < 0 || !map.is_cut[mesh.edge_of[h]]) continue;
-      const Vec2 t = map.translation(mesh, h);
-      worst = std::max({worst, distance_to_integer(t.x()), distance_to_integer(t.y())});
-    }
-    return worst;
-  };
-  auto round_exactly = [&](const Parametrization& solved) {
-    Timer sanitize_timer;
-    result.continuous = solved;
-    stats.max_integer_residual = integer_residual(solved);
-    SanitizeResult exact = sanitize_with_isolines(mesh, solved, iso, sanitize);
-    stats.unresolved_equations = exact.unresolved_equations;
-    result.param = std::move(exact.param);
-    result.snapped_vertices = snap_vertices;
-    result.isolines = iso;
-    count_exact_irregular(result.param, &stats.flipped_triangles, &stats.degenerate_triangles);
-    stats.winding_defects = count_exact_winding_defects(mesh, result.param, cones);
-    stats.seconds_sanitize += sanitize_timer.seconds();
-  };
-  progress.update(0.42);
-  round_exactly(solution.param);
-  stats.path = options.penalty_regularity ? "global" : "global (penalty without regularity)";
-  stats.penalty_integer_residual = integer_residual(pose);
+}
 
-  // Escalation: the paper's penalty phase with re-linearized regularity constraints.
-  if (irregular() > 0 && options.regularity && !options.penalty_regularity && options.escalate) {
-    const IntegerGridMap first = result;
-    const IgmStats first_stats = stats;
-    const int before = irregular();
-    solution = solve_global(true, 0.45, 0.85);
-    round_exactly(solution.param);
-    stats.penalty_integer_residual = integer_residual(pose);
-    if (irregular() < before) {
-      stats.path = "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
-    } else {
-      result = first;
-      const int iterations = stats.penalty_iterations;
-      stats = first_stats;
-      stats.penalty_iterations = iterations;
-    }
+double IntegerGridMapSolver::integer_residual(const Parametrization& map) const {
+  double worst = 0;
+  for (int c = 0; c < mesh_.num_halfedges(); ++c) {
+    const int v = mesh_.F(c / 3, c % 3);
+    for (int a = 0; a < 2; ++a)
+      if (snap_vertices_[v] || ((sanitize_.snap_corner_axes[c] >> a) & 1))
+        worst = std::max(worst, distance_to_integer(map.uv(c, a)));
   }
-  stats.seconds_solve = solve_timer.seconds();
-
-  // Fallback: the same hard solve with every triangle under tri-sector constraints linearized
-  // around the (flip-free) seamless map, a convex problem whose feasible maps are all regular.
-  if (irregular() > 0 && options.regularity && options.allow_fallback && options.escalate) {
-    Parametrization seamless_pose = seamless.param;
-    seamless_pose.uv *= scale;
-    so.regularity = RegularityMode::AllFaces;
-    so.reference = &seamless_pose;
-    so.progress_begin = 0.88;
-    so.progress_end = 0.99;
-    const ParametrizationSolution all = problem.solve(so, progress);
-    stats.ipopt_solves += all.stats.ipopt_solves;
-    stats.ipopt_iterations += all.stats.ipopt_iterations;
-    const int before = irregular();
-    const IntegerGridMap global = result;
-    const IgmStats global_stats = stats;
-    round_exactly(all.param);
-    if (irregular() < before) {
-      stats.fallback_used = true;
-      stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
-    } else {
-      result = global;
-      stats = global_stats;
-      stats.path = "global (all-faces fallback did not help)";
-    }
+  for (int h = 0; h < mesh_.num_halfedges(); ++h) {
+    if (mesh_.opposite[h] < 0 || !map.is_cut[mesh_.edge_of[h]]) continue;
+    const Vec2 t = map.translation(mesh_, h);
+    worst = std::max({worst, distance_to_integer(t.x()), distance_to_integer(t.y())});
   }
+  return worst;
+}
 
-  stats.parametric_area = exact_parametric_area(result.param, &stats.area_is_integral);
-  stats.seconds = timer.seconds();
-  progress.update(1.0);
+IntegerGridMap IntegerGridMapSolver::round_exactly(const Parametrization& solved) {
+  Timer sanitize_timer;
+  IntegerGridMap result;
+  result.continuous = solved;
+  stats_.max_integer_residual = integer_residual(solved);
+  SanitizeResult exact = sanitize_with_isolines(mesh_, solved, isolines_, sanitize_);
+  stats_.unresolved_equations = exact.unresolved_equations;
+  result.param = std::move(exact.param);
+  result.snapped_vertices = snap_vertices_;
+  result.isolines = isolines_;
+  count_exact_irregular(result.param, &stats_.flipped_triangles, &stats_.degenerate_triangles);
+  stats_.winding_defects = count_exact_winding_defects(mesh_, result.param, cones_);
+  stats_.seconds_sanitize += sanitize_timer.seconds();
   return result;
 }
 
-Json igm_report(const IgmStats& s) {
-  return Json{{"flipped_triangles", s.flipped_triangles},
-              {"degenerate_triangles", s.degenerate_triangles},
-              {"max_integer_residual", s.max_integer_residual},
-              {"fallback_used", s.fallback_used},
-              {"penalty_iterations", s.penalty_iterations},
-              {"seconds", s.seconds},
-              {"path", s.path},
-              {"penalty_integer_residual", s.penalty_integer_residual},
-              {"constraints", s.constraints},
-              {"max_constraint_violation", s.max_constraint_violation},
-              {"unresolved_equations", s.unresolved_equations},
-              {"parametric_area", s.parametric_area},
-              {"ipopt_solves", s.ipopt_solves},
-              {"ipopt_iterations", s.ipopt_iterations},
-              {"seconds_solve", s.seconds_solve},
-              {"seconds_sanitize", s.seconds_sanitize},
-              {"flipped_before_untangle", s.flipped_before_untangle},
-              {"degenerate_before_untangle", s.degenerate_before_untangle},
-              {"untangled_vertices", s.untangled_vertices},
-              {"winding_defects", s.winding_defects}};
+IntegerGridMap IntegerGridMapSolver::solve(IgmAttempt attempt, double progress_begin, double progress_end) {
+  Timer timer;
+  IntegerGridMap result;
+  if (attempt == IgmAttempt::AllFaces) {
+    if (!solved_once_)
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: the all-faces attempt needs a global attempt first");
+    result = round_exactly(solve_all_faces(progress_begin, progress_end).param);
+  } else {
+    const ParametrizationSolution solution =
+        solve_global(attempt == IgmAttempt::RelinearizedPenalty, progress_begin, progress_end);
+    // Exact rounding: singular/corner vertices snapped to integers (translations become
+    // integral), feature and boundary edges exact isolines on integer values. The first attempt's
+    // snapped sets are kept by later ones (they follow from the T-mesh and the transitions).
+    if (!solved_once_) set_snapping(snap_vertices_, isolines_);
+    progress_.update(progress_end + 0.02);
+    result = round_exactly(solution.param);
+    stats_.penalty_integer_residual = integer_residual(pose_);
+    solved_once_ = true;
+  }
+  stats_.attempt = attempt;
+  stats_.seconds_solve += timer.seconds();
+  stats_.parametric_area = exact_parametric_area(result.param, &stats_.area_is_integral);
+  result.stats = stats_;
+  return result;
 }
+
 
 }  // namespace qgp

@@ -7,20 +7,15 @@
 // integer_grid_rows), p_b = τ(p_a) + Σ x_e · d_e in the chart where the path ends. One node (a
 // singular one if any) is fixed at its rounded position, so all of them get integer coordinates.
 //
-// Solve (§7.1), in escalating attempts until the exact map has no flipped/degenerate triangle:
-//  1. (default) one equality-only penalty solve λ‖Cz − b‖² (λ = 1e6; it meets ‖Cz − b‖∞ ≤ 1e-4
-//     on every mesh tested), then the hard solve with Ipopt repair of flipped triangles
-//     (tri-sector constraints linearized around the seamless map);
-//  2. the paper's penalty phase: penalty solves with the regularity repair, each re-linearized
-//     around the previous result, until ‖Cz − b‖∞ ≤ 1e-4, then the hard solve around the last pose;
-//  3. fallback: the hard solve with every triangle under tri-sector constraints around the
-//     seamless map (stats.fallback_used). The paper's §7.1.1 per-cell fallback (T-mesh edges
-//     inserted into the mesh, cells mapped onto their integer rectangles) is not implemented.
-// The hard solve imposes the integer quantities that Cz = b determines (singular/corner vertex
-// positions, cut translations, feature/boundary isoline values, rounded from the penalty optimum,
-// which is within 1e-4 of them), exactly: unit coefficients keep the elimination integral (the
-// path rows themselves carry barycentric coefficients). Finally sanitize_with_isolines snaps
-// them to exact integers. stats.path names the attempt that produced the result.
+// Solve (§7.1): one IntegerGridMapSolver per component and quantization runs attempts (IgmAttempt):
+// the default one, the paper's re-linearized penalty phase, and the hard solve with every triangle
+// under tri-sector constraints. Which attempts run, and which map is kept, is the pipeline's
+// decision (pipeline/policy.h). The hard solve imposes the integer quantities that Cz = b
+// determines (singular/corner vertex positions, cut translations, feature/boundary isoline values,
+// rounded from the penalty optimum, which is within 1e-4 of them), exactly: unit coefficients keep
+// the elimination integral (the path rows themselves carry barycentric coefficients). Finally
+// sanitize_with_isolines snaps them to exact integers. The fallback map of §7.1.1 (T-mesh edges
+// inserted, each cell mapped onto its integer rectangle) is igm/cell_map.h.
 #pragma once
 #include <string>
 #include <vector>
@@ -43,23 +38,27 @@ struct IgmOptions {
   double edge_length = 1;        // model units per uv unit of the seamless map (SeamlessMapOptions)
   double penalty_weight = 1e6;   // λ of the penalty phase
   double penalty_tolerance = 1e-4;  // stop the penalty phase at ‖Cz − b‖∞ ≤ this (quad units)
-  int max_penalty_rounds = 8;    // penalty solves (each re-linearized around the previous one)
+  int max_penalty_rounds = 8;    // penalty solves of the re-linearized attempt
   int max_repair_rounds = 24;    // Ipopt repair rounds per solve
   int relinearization_rounds = 1;  // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;        // of the exact result
-  bool regularity = true;        // Ipopt repair of flipped triangles (off: equality-only solves)
-  // Regularity also in the penalty solves (paper §7.1). Off (default, much faster): one
-  // equality-only penalty solve fixes the integer values (they follow from Cz = b, not from the
-  // regularity) and the hard solve alone repairs flips, linearized around the seamless map; if
-  // flips remain, the paper's re-linearized penalty phase runs as well and the better map is kept.
-  bool penalty_regularity = false;
-  // When the exact map has flipped/degenerate triangles: hard solve again with all triangles
-  // under tri-sector constraints around the seamless map (not yet the paper's §7.1.1 per-cell map).
-  bool allow_fallback = true;
-  // false: stop after the first attempt (the caller has its own fallback, e.g. quads straight from
-  // the T-mesh layout); the escalations can cost minutes on large meshes.
-  bool escalate = true;
 };
+
+// What one solve of the integer-grid map does (paper §7.1).
+enum class IgmAttempt {
+  // One equality-only penalty solve λ‖Cz − b‖² fixes the integer values (they follow from Cz = b,
+  // not from the regularity; it meets ‖Cz − b‖∞ ≤ 1e-4 on every mesh tested), then the hard solve
+  // repairs flipped triangles with Ipopt (tri-sector constraints linearized around the seamless map).
+  Default,
+  // The paper's penalty phase: penalty solves with the regularity repair, each re-linearized around
+  // the previous result, until ‖Cz − b‖∞ ≤ penalty_tolerance, then the hard solve around the last pose.
+  RelinearizedPenalty,
+  // The last attempt's hard solve again with every triangle under tri-sector constraints
+  // linearized around the (flip-free) seamless map: a convex problem whose feasible maps are all
+  // regular. Needs an earlier attempt (its integer values).
+  AllFaces,
+};
+const char* igm_attempt_name(IgmAttempt attempt);
 
 struct IgmStats {
   int flipped_triangles = 0;        // in the exact result (exact sign)
@@ -72,15 +71,16 @@ struct IgmStats {
                                     // transition translation / feature isoline from an integer
   double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)
   double max_constraint_violation = 0;  // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
-  bool fallback_used = false;
-  std::string path;                 // "global" or "fallback: <what ran>"
-  int penalty_iterations = 0;       // penalty solves run (all attempts)
+  IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
+  bool fallback_used = false;       // made by the all-faces attempt
+  std::string path;                 // the policy's account of the attempts (pipeline/policy.h)
+  int penalty_iterations = 0;       // penalty solves run (all attempts so far)
   std::vector<double> penalty_violation;  // ‖Cz − b‖∞ after each penalty solve
   int constraints = 0;              // scalar rows of C
   int unresolved_equations = 0;     // of the sanitization (0 expected)
   int64_t parametric_area = 0;      // Σ triangle areas in uv, in quad units (== quads_expected)
   bool area_is_integral = true;
-  int ipopt_solves = 0, ipopt_iterations = 0;
+  int ipopt_solves = 0, ipopt_iterations = 0;  // all attempts so far
   double seconds = 0, seconds_solve = 0, seconds_sanitize = 0;
 };
 
@@ -91,17 +91,6 @@ struct IntegerGridMap {
   std::vector<char> snapped_vertices;     // #V: held on integer points (singular, corners, seeds)
   std::vector<IsolineConstraint> isolines;  // feature and boundary edges held on integer isolines
 };
-
-// mesh: one component (connectivity built); field, cut: its cross field and cut graph (frames,
-// feature edges, isolines); seamless: its continuous seamless map (1 uv unit = options.edge_length);
-// sanitized: the exact map the T-mesh was traced on; tmesh: its T-mesh; quantization: a valid
-// quantization of it (x, scale). Throws Error(InvalidArgument) for mismatched inputs,
-// Error(StageFailed) if no integer-grid map is found, Error(Cancelled) on cancel. Reports progress
-// with update() within the caller's stage.
-IntegerGridMap compute_integer_grid_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
-                                        const SeamlessMap& seamless, const ExactParametrization& sanitized,
-                                        const TMesh& tmesh, const QuantizationResult& quantization,
-                                        const IgmOptions& options, Progress& progress);
 
 // The rows of C z = b for the given T-edge lengths (#edges, in uv units of the map to be solved):
 // for paths of T-edges between singular / feature-corner / boundary-corner / seed nodes (a BFS
@@ -117,6 +106,70 @@ struct IgmRow {
 std::vector<IgmRow> integer_grid_rows(const TriMesh& mesh, const ExactParametrization& sanitized, const TMesh& tmesh,
                                       const std::vector<double>& lengths, int root);
 
+// Solves the integer-grid map of one component for one quantization, attempt by attempt.
+// mesh: one component (connectivity built); field, cut: its cross field and cut graph (frames,
+// feature edges, isolines); seamless: its continuous seamless map (1 uv unit = options.edge_length);
+// sanitized: the exact map the T-mesh was traced on; tmesh: its T-mesh; quantization: a valid
+// quantization of it (x, scale). The constructor throws Error(InvalidArgument) for mismatched
+// inputs and Error(StageFailed) for a T-mesh without consistent path constraints; solve() throws
+// Error(Cancelled) on cancel. The solver keeps references to its inputs. Progress is reported with
+// update() within the caller's stage.
+class IntegerGridMapSolver {
+ public:
+  IntegerGridMapSolver(const TriMesh& mesh, const CrossField& field, const CutGraph& cut, const SeamlessMap& seamless,
+                       const ExactParametrization& sanitized, const TMesh& tmesh, const QuantizationResult& quantization,
+                       const IgmOptions& options, Progress& progress);
+  ~IntegerGridMapSolver();
+
+  // Runs one attempt and rounds its result exactly. The stats' effort counters (solves,
+  // iterations, penalty rounds, seconds) count every attempt so far.
+  IntegerGridMap solve(IgmAttempt attempt, double progress_begin, double progress_end);
+
+ private:
+  void add_seamless_isolines(const SeamlessMap& seamless, const CutGraph& cut);
+  void build_path_rows(const ExactParametrization& sanitized, const QuantizationResult& quantization);
+  // C z = b: the path rows, and the root node at its rounded position.
+  void add_path_constraints();
+  // Penalty solves of C z = b (with re-linearized regularity, or one equality-only solve).
+  ParametrizationSolution penalty_phase(bool with_regularity, double begin, double end);
+  // Replaces C z = b by the integer values it determines, rounded from `integers`.
+  void impose_integers(const Parametrization& integers);
+  // The solve under impose_integers()' constraints with Ipopt repair of flipped triangles.
+  ParametrizationSolution hard_solve(bool after_relinearized_penalty, double begin, double end);
+  // Penalty phase, then the hard solve.
+  ParametrizationSolution solve_global(bool relinearized_penalty, double begin, double end);
+  // The last hard solve with every triangle under tri-sector constraints around the seamless map.
+  ParametrizationSolution solve_all_faces(double begin, double end);
+  void count_solves(const ParametrizationSolution& solution);
+  // What the exact rounding snaps: these vertices, and these edges' corners on their isoline axis.
+  void set_snapping(const std::vector<char>& snap_vertices, const std::vector<IsolineConstraint>& isolines);
+  // Largest distance from an integer of what the exact rounding snaps.
+  double integer_residual(const Parametrization& map) const;
+  // The exact map of `solved` (snapped, sanitized) and its flipped / degenerate / wound counts.
+  IntegerGridMap round_exactly(const Parametrization& solved);
+
+  const TriMesh& mesh_;
+  const CrossField& field_;
+  const TMesh& tmesh_;
+  const IgmOptions options_;
+  Progress& progress_;
+  bool inputs_checked_;
+  ParametrizationProblem problem_;  // at the quantization's scale: 1 uv unit = one quad edge
+  double scale_;
+  std::vector<int> cones_;          // cone angle of each vertex, in quarter turns
+  int root_ = 0;
+  std::vector<IgmRow> rows_;
+  Parametrization seamless_pose_;   // the seamless map at the quantization's scale
+  Parametrization pose_;            // linearization pose of the penalty phase
+  ParametrizationSolveOptions solve_options_;
+  std::vector<char> snap_vertices_;
+  std::vector<IsolineConstraint> isolines_;
+  SanitizeOptions sanitize_;
+  bool solved_once_ = false;
+  IgmStats stats_;
+};
+
+
 // Exact counts of flipped (area < 0) and degenerate (area == 0) triangles.
 void count_exact_irregular(const ExactParametrization& param, int* flipped, int* degenerate);
 
@@ -127,8 +180,10 @@ int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization&
 // whether it is a whole number.
 int64_t exact_parametric_area(const ExactParametrization& param, bool* integral);
 
-// Report object `igm`: flipped_triangles, degenerate_triangles, max_integer_residual,
-// fallback_used, penalty_iterations, seconds (+ path, constraints, parametric_area).
-Json igm_report(const IgmStats& stats);
+// Report object `igm.components[i]`.
+QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, max_integer_residual, fallback_used,
+                penalty_iterations, seconds, path, penalty_integer_residual, constraints, max_constraint_violation,
+                unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, seconds_solve, seconds_sanitize,
+                flipped_before_untangle, degenerate_before_untangle, untangled_vertices, winding_defects)
 
 }  // namespace qgp

@@ -160,8 +160,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
   return result;
 }
 
-Json intake_report(const IntakeResult& r) {
-  Json input;
+void to_json(Json& input, const IntakeResult& r) {
   input["vertices"] = r.mesh.num_vertices();
   input["faces"] = r.mesh.num_faces();
   input["input_vertices"] = r.input_vertices;
@@ -182,7 +181,6 @@ Json intake_report(const IntakeResult& r) {
   for (const Repair& rep : r.repairs) repairs.push_back({{"kind", rep.kind}, {"count", rep.count}});
   input["repairs"] = repairs;
   input["warnings"] = r.warnings;
-  return input;
 }
 
 std::vector<char> map_input_edges(const IntakeResult& intake,

@@ -51,7 +51,7 @@ struct IntakeResult {
 IntakeResult run_intake(const PolygonSoup& soup, const IntakeOptions& options, Progress& progress);
 
 // The "input" object of the JSON report.
-Json intake_report(const IntakeResult& result);
+void to_json(Json& j, const IntakeResult& result);
 
 // Marks the mesh edges whose endpoints are the given input vertex pairs. Pairs that match no
 // edge (not adjacent in the input, or removed by a repair) are counted in *unmatched.

@@ -1,12 +1,15 @@
 // Options of a remesh / grid-UV job, shared by the C API, the CLI and the add-on.
 #pragma once
 #include <array>
-#include <string>
 #include <vector>
+
+#include "quantization/quantization.h"
 
 namespace qgp {
 
-enum class Quantizer { Greedy, Round };
+// What a session run produces: the repaired input only, quads (and their integer-grid map), or the
+// integer-grid map on the input's own triangles (grid UVs).
+enum class Job { Intake, Remesh, GridUV };
 
 struct RemeshOptions {
   double target_faces = 0;      // desired quad count; <= 0: unset
@@ -21,9 +24,5 @@ struct RemeshOptions {
 
   static constexpr double kDefaultTargetFaces = 2000;
 };
-
-// Parses "greedy" / "round"; throws Error(InvalidArgument) otherwise.
-Quantizer parse_quantizer(const std::string& name);
-const char* quantizer_name(Quantizer q);
 
 }  // namespace qgp

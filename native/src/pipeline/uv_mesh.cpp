@@ -1,6 +1,7 @@
 #include "pipeline/uv_mesh.h"
 
 #include "core/error.h"
+#include "pipeline/policy.h"
 
 namespace qgp {
 
@@ -8,8 +9,8 @@ bool available_uv_map(const Session& session, UvMapKind* kind) {
   if (session.intake() == nullptr || session.components().empty()) return false;
   bool igm = true, seamless = true;
   for (const ComponentState& c : session.components()) {
-    igm = igm && c.igm.has_value();
-    seamless = seamless && c.seamless.has_value();
+    igm = igm && c.igm_is_current();
+    seamless = seamless && c.seamless_is_current();
   }
   if (kind) *kind = igm ? UvMapKind::IntegerGrid : UvMapKind::Seamless;
   return igm || seamless;
@@ -22,8 +23,8 @@ UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
                                                                      : "no seamless map: run a grid-UV or remesh job first");
   const IntakeResult& intake = *session.intake();
   const bool grid = kind == UvMapKind::IntegerGrid;
-  auto refined = [&](const ComponentState& c) { return grid && c.cell_map.has_value(); };
-  auto mesh_of = [&](const ComponentState& c) -> const TriMesh& { return refined(c) ? c.cell_map->mesh : c.mesh; };
+  auto refined = [&](const ComponentState& c) { return grid && cell_map_in_use(c) != nullptr; };
+  auto mesh_of = [&](const ComponentState& c) -> const TriMesh& { return refined(c) ? cell_map_in_use(c)->mesh : c.mesh; };
 
   UvMesh out;
   int num_vertices = intake.mesh.num_vertices(), num_faces = 0;
@@ -47,15 +48,15 @@ UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
       out.mesh.V.row(id[v]) = mesh.V.row(v);
     }
     for (int f = 0; f < mesh.num_faces(); ++f, ++face) {
-      const int component_face = refined(c) ? c.cell_map->source_face[f] : f;
+      const int component_face = refined(c) ? cell_map_in_use(c)->source_face[f] : f;
       const int intake_face = component_face >= 0 ? c.face_map[component_face] : -1;
       out.source_face[face] = intake_face >= 0 ? intake.input_face[intake_face] : -1;
       for (int k = 0; k < 3; ++k) {
         out.mesh.F(face, k) = id[mesh.F(f, k)];
         if (refined(c))
-          out.uv.row(3 * face + k) = c.cell_map->corner_uv[3 * f + k].transpose();
+          out.uv.row(3 * face + k) = cell_map_in_use(c)->corner_uv[3 * f + k].transpose();
         else if (grid)
-          for (int a = 0; a < 2; ++a) out.uv(3 * face + k, a) = c.igm->to_double(c.igm->uv[3 * f + k][a]);
+          for (int a = 0; a < 2; ++a) out.uv(3 * face + k, a) = c.igm->map.to_double(c.igm->map.uv[3 * f + k][a]);
         else
           out.uv.row(3 * face + k) = c.seamless->param.uv.row(3 * f + k);
       }

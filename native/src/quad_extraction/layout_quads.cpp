@@ -367,13 +367,5 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   return result;
 }
 
-Json layout_quads_stats_json(const LayoutQuadsStats& s) {
-  return Json{{"quads", s.quads},
-              {"collapsed_cells", s.collapsed_cells},
-              {"zero_edges", s.zero_edges},
-              {"merged_points", s.merged_points},
-              {"walk_failures", s.walk_failures},
-              {"seconds", s.seconds}};
-}
 
 }  // namespace qgp

@@ -47,6 +47,6 @@ struct LayoutQuads {
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tmesh,
                                  const std::vector<int64_t>& x, Progress& progress, bool with_positions = true);
 
-Json layout_quads_stats_json(const LayoutQuadsStats& stats);
+QGP_JSON_FIELDS(LayoutQuadsStats, quads, collapsed_cells, zero_edges, merged_points, walk_failures, seconds)
 
 }  // namespace qgp

@@ -684,8 +684,7 @@ void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
     into.quad_face.clear();
 }
 
-Json quad_extraction_stats_json(const QuadExtractionStats& s) {
-  Json j;
+void to_json(Json& j, const QuadExtractionStats& s) {
   j["grid_points"] = {{"vertices", s.grid_points_on_vertices},
                       {"edges", s.grid_points_on_edges},
                       {"faces", s.grid_points_in_faces}};
@@ -701,7 +700,6 @@ Json quad_extraction_stats_json(const QuadExtractionStats& s) {
                   {"inconsistent_segments", s.inconsistent_segments},
                   {"non_quad_faces", s.non_quad_faces}};
   j["seconds"] = s.seconds;
-  return j;
 }
 
 }  // namespace qgp

@@ -70,6 +70,6 @@ QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& ig
 void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component);
 
 // Stats as JSON (for the `quad` / diagnostics part of the report).
-Json quad_extraction_stats_json(const QuadExtractionStats& stats);
+void to_json(Json& j, const QuadExtractionStats& stats);
 
 }  // namespace qgp

@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/max_min_lp.h"
 #include "core/timer.h"
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 #include "quad_extraction/surface_projection.h"
 
 namespace qgp {

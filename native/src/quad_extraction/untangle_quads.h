@@ -4,6 +4,7 @@
 #pragma once
 #include <vector>
 
+#include "core/json.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/quad_mesh.h"
@@ -16,6 +17,7 @@ struct UntangleStats {
   int accepted_rounds = 0, rounds = 0;
   double seconds = 0;
 };
+QGP_JSON_FIELDS(UntangleStats, flipped_before, flipped_after, moved_vertices, seconds)
 
 // Free vertices (not on the quad mesh's boundary, not on a feature or boundary edge or feature
 // vertex of `surface`) of flipped quads and up to max_rings rings around them move one at a time:

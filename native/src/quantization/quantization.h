@@ -23,11 +23,15 @@
 
 namespace qgp {
 
-enum class QuantizationMethod { Greedy, Round };
+// The quantizers: the paper's greedy one (quantize(), below) and the direct-rounding baseline
+// (quantize_by_rounding(), round_quantization.h), kept so that its failures can be counted beside.
+enum class Quantizer { Greedy, Round };
+// "greedy" / "round"; parse_quantizer throws Error(InvalidArgument) for any other name.
+const char* quantizer_name(Quantizer quantizer);
+Quantizer parse_quantizer(const std::string& name);
 
 struct QuantizationOptions {
   double scale = 1;  // x_ideal(e) = scale * length(e); see quantization_scale_for_quads()
-  QuantizationMethod method = QuantizationMethod::Greedy;
   // Ideal lengths below this (in quad units) are raised to it in the objective and the weights, so
   // that edges of zero continuous length get a finite, very large penalty for x > 0.
   double min_ideal_length = 1e-3;
@@ -48,7 +52,7 @@ struct QuantizationOptions {
 
 struct QuantizationResult {
   std::vector<int64_t> x;  // #edges: integer length of each T-edge, >= 0
-  QuantizationMethod method = QuantizationMethod::Greedy;
+  Quantizer quantizer = Quantizer::Greedy;
   double scale = 1;
   bool valid = false;
   std::string invalid_reason;    // empty when valid
@@ -73,9 +77,7 @@ struct QuantizationResult {
   double stage1_seconds = 0, stage2_seconds = 0, seconds = 0;
 };
 
-// Runs the quantizer selected by options.method. Greedy needs only the T-mesh; Round needs the
-// parametrization and the tracer and is provided by quantize_by_rounding() (round_quantization.h):
-// here it throws Error(InvalidArgument). Throws Error(InvalidArgument) for a malformed T-mesh,
+// The greedy quantizer (paper §6). Throws Error(InvalidArgument) for a malformed T-mesh,
 // Error(StageFailed) if no valid quantization is reachable, Error(Cancelled) on cancel.
 QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& options, Progress& progress);
 
@@ -106,10 +108,8 @@ int64_t quantization_quads(const TMesh& tmesh, const std::vector<int64_t>& x);  
 double quantization_objective(const TMesh& tmesh, const std::vector<int64_t>& x, double scale,
                               double min_ideal_length = 1e-3);
 
-const char* quantization_method_name(QuantizationMethod method);
-
-// Report object `quantization`: method, scale, valid, objective, zero_edges, stage1_steps,
-// stage2_steps, consistency_residual, quads_expected, seconds (+ a few diagnostics).
-Json quantization_report(const QuantizationResult& result);
+// Report object `quantization.components[i]`: method, scale, valid, objective, zero_edges,
+// stage1_steps, stage2_steps, consistency_residual, quads_expected, seconds (+ a few diagnostics).
+void to_json(Json& j, const QuantizationResult& result);
 
 }  // namespace qgp

@@ -78,7 +78,7 @@ class GreedyQuantizer {
 
   QuantizationResult run() {
     QuantizationResult r;
-    r.method = QuantizationMethod::Greedy;
+    r.quantizer = Quantizer::Greedy;
     r.scale = options_.scale;
     Timer total;
     stage1(r);
@@ -411,9 +411,6 @@ QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& optio
     if (m < 0 || m > 1) throw Error(ErrorCode::InvalidArgument, "quantization: min_length values must be 0 or 1");
   if (!(options.min_ideal_length > 0))
     throw Error(ErrorCode::InvalidArgument, "quantization: min_ideal_length must be positive");
-  if (options.method != QuantizationMethod::Greedy)
-    throw Error(ErrorCode::InvalidArgument,
-                "quantization: the 'round' baseline needs the parametrization; use quantize_by_rounding()");
   GreedyQuantizer quantizer(tmesh, options, progress);
   return quantizer.run();
 }
@@ -482,13 +479,16 @@ double quantization_scale_for_edge_length(const TMesh& tmesh, double surface_are
   return quantization_scale_for_quads(tmesh, surface_area / (edge_length * edge_length));
 }
 
-const char* quantization_method_name(QuantizationMethod method) {
-  return method == QuantizationMethod::Greedy ? "greedy" : "round";
+const char* quantizer_name(Quantizer quantizer) { return quantizer == Quantizer::Greedy ? "greedy" : "round"; }
+
+Quantizer parse_quantizer(const std::string& name) {
+  if (name == "greedy") return Quantizer::Greedy;
+  if (name == "round") return Quantizer::Round;
+  throw Error(ErrorCode::InvalidArgument, "unknown quantizer '" + name + "' (use greedy or round)");
 }
 
-Json quantization_report(const QuantizationResult& r) {
-  Json j;
-  j["method"] = quantization_method_name(r.method);
+void to_json(Json& j, const QuantizationResult& r) {
+  j["method"] = quantizer_name(r.quantizer);
   j["scale"] = r.scale;
   j["valid"] = r.valid;
   if (!r.invalid_reason.empty()) j["invalid_reason"] = r.invalid_reason;
@@ -507,7 +507,6 @@ Json quantization_report(const QuantizationResult& r) {
   j["unreachable_edges"] = r.unreachable_edges;
   j["searches"] = r.searches;
   j["validity_checks"] = r.validity_checks;
-  return j;
 }
 
 }  // namespace qgp

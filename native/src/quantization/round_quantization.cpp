@@ -231,7 +231,7 @@ RoundingResult quantize_by_rounding(const TriMesh& mesh, const Parametrization& 
   Timer timer;
   RoundingResult out;
   QuantizationResult& r = out.quantization;
-  r.method = QuantizationMethod::Round;
+  r.quantizer = Quantizer::Round;
   r.scale = options.scale;
   r.objective = std::numeric_limits<double>::quiet_NaN();
   progress.update(0);

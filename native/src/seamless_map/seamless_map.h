@@ -3,6 +3,7 @@
 #pragma once
 #include <vector>
 
+#include "core/json.h"
 #include "core/parametrization.h"
 #include "core/progress.h"
 #include "cross_field/cross_field.h"
@@ -38,6 +39,10 @@ struct SeamlessMapStats {
   double min_area_ratio = 0;      // min parametric / ideal (field-aligned) triangle area
   double seconds_cholesky = 0, seconds_ipopt = 0;
 };
+// Report object `seamless.components[i]`.
+QGP_JSON_FIELDS(SeamlessMapStats, flipped_triangles, degenerate_triangles, winding_defects, max_transition_residual,
+                energy, ipopt_iterations, flipped_before_ipopt, isoline_edges, dropped_isolines, repair_rounds,
+                field_frame_solves, min_area_ratio)
 
 struct SeamlessMap {
   Parametrization param;  // rotation[] and is_cut from the cut graph

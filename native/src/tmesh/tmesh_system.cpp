@@ -57,9 +57,9 @@ TMeshCheck check_tmesh(const TMesh& tmesh) {
   return check;
 }
 
-Json tmesh_report(const TMesh& tmesh) {
+void to_json(Json& j, const TMesh& tmesh) {
   const TMeshCheck check = check_tmesh(tmesh);
-  Json j = Json::object();
+  j = Json::object();
   j["nodes"] = tmesh.nodes.size();
   j["edges"] = tmesh.edges.size();
   j["cells"] = tmesh.cells.size();
@@ -76,7 +76,6 @@ Json tmesh_report(const TMesh& tmesh) {
   j["seeds"] = tmesh.stats.seeds;
   j["steps"] = tmesh.stats.steps;
   j["walls_not_isolines"] = tmesh.stats.walls_not_isolines;
-  return j;
 }
 
 void write_layout_obj(std::ostream& out, const TriMesh& mesh, const TMesh& tmesh, long long& vertex_offset) {

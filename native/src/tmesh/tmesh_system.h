@@ -34,7 +34,7 @@ TMeshCheck check_tmesh(const TMesh& tmesh);
 
 // {nodes, edges, cells, singular_nodes, t_junctions, euler_characteristic, cells_not_four_sided,
 //  max_cell_equation_residual, trace_seconds, motorcycles, head_on, crossings, ...}
-Json tmesh_report(const TMesh& tmesh);
+void to_json(Json& j, const TMesh& tmesh);
 
 // Writes the T-mesh edges as OBJ polylines (`l` over `v` points on the surface of `mesh`) and
 // its nodes as points (`p`). vertex_offset: OBJ vertices written before (updated), so several

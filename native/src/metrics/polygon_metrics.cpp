@@ -1,4 +1,4 @@
-#include "quad_extraction/polygon_metrics.h"
+#include "metrics/polygon_metrics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -134,8 +134,8 @@ PolygonMeshMetrics measure_polygon_mesh(const PolygonSoup& mesh, const TriMesh& 
   return m;
 }
 
-Json polygon_metrics_json(const PolygonMeshMetrics& m) {
-  Json j = quad_report_json(m.quad);
+void to_json(Json& j, const PolygonMeshMetrics& m) {
+  j = m.quad;
   j["vertices"] = m.vertices;
   j["faces"] = m.faces;
   j["quads"] = m.quads;
@@ -147,7 +147,6 @@ Json polygon_metrics_json(const PolygonMeshMetrics& m) {
   j["sharp_edges"] = m.sharp_edges;
   j["sharp_edge_coverage"] = m.sharp_edge_coverage;
   j["sharp_edge_tolerance"] = m.sharp_edge_tolerance;
-  return j;
 }
 
 }  // namespace qgp

@@ -5,7 +5,7 @@
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "intake/polygon_soup.h"
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 
 namespace qgp {
 
@@ -25,6 +25,6 @@ struct PolygonMeshMetrics {
 PolygonMeshMetrics measure_polygon_mesh(const PolygonSoup& mesh, const TriMesh& reference, double sharp_angle_deg,
                                         Progress& progress);
 
-Json polygon_metrics_json(const PolygonMeshMetrics& m);
+void to_json(Json& j, const PolygonMeshMetrics& m);
 
 }  // namespace qgp

@@ -1,4 +1,4 @@
-#include "quad_extraction/quad_metrics.h"
+#include "metrics/quad_metrics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -199,8 +199,7 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
   return m;
 }
 
-Json quad_report_json(const QuadMetrics& m) {
-  Json j;
+void to_json(Json& j, const QuadMetrics& m) {
   j["faces"] = m.topology.faces;
   j["vertices"] = m.topology.vertices;
   j["irregular_vertices"] = m.irregular_vertices;
@@ -218,7 +217,6 @@ Json quad_report_json(const QuadMetrics& m) {
   j["hausdorff"] = m.hausdorff;
   j["hausdorff_quads_to_mesh"] = m.hausdorff_quads_to_mesh;
   j["hausdorff_mesh_to_quads"] = m.hausdorff_mesh_to_quads;
-  return j;
 }
 
 }  // namespace qgp

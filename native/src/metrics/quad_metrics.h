@@ -76,6 +76,6 @@ std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<s
 double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target, Progress& progress);
 
 // The report object `quad`: {faces, vertices, irregular_vertices, ...metrics}.
-Json quad_report_json(const QuadMetrics& metrics);
+void to_json(Json& j, const QuadMetrics& metrics);
 
 }  // namespace qgp

@@ -1,0 +1,27 @@
+// The stages of one component, each run only when its stored result was computed from other
+// inputs (pipeline/stage_result.h). Every function leaves the component's result of its stage up
+// to date and returns; failures throw Error as the stage does.
+#pragma once
+#include "core/progress.h"
+#include "pipeline/component_state.h"
+#include "pipeline/options.h"
+
+namespace qgp {
+
+// Stage 1a, 1b: the cross field (hard-constrained on the component's feature edges) and its cut graph.
+void update_cross_field(ComponentState& state, Progress& progress);
+void update_cut_graph(ComponentState& state, Progress& progress);
+// Stage 1c: the seamless map for quads of `edge_length` (a map solved for a nearby length is
+// rescaled instead, see seamless_map_serves).
+void update_seamless_map(ComponentState& state, double edge_length, Progress& progress);
+// Stage 2: the seamless map made exact with features and boundary on isolines, and its T-mesh.
+void update_tmesh(ComponentState& state, Progress& progress);
+// Stage 3: integer T-edge lengths for quads of `edge_length`, by the chosen quantizer.
+void update_quantization(ComponentState& state, double edge_length, Quantizer quantizer, Progress& progress);
+// Stage 4: the integer-grid map (escalating for grid-UV jobs), and for fallback_uv_map the cell map.
+void update_integer_grid_map(ComponentState& state, Job job, Progress& progress);
+void update_cell_map(ComponentState& state, Progress& progress);
+// Stage 5: the component's quads.
+void update_quads(ComponentState& state, Progress& progress);
+
+}  // namespace qgp

@@ -1,0 +1,128 @@
+// One connected component on its way through the pipeline: the component itself and every stage's
+// result, each stored with the key of the inputs it was computed from (pipeline/stage_result.h).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/parametrization.h"
+#include "cross_field/cross_field.h"
+#include "cut_graph/cut_graph.h"
+#include "igm/cell_map.h"
+#include "igm/integer_grid_map.h"
+#include "pipeline/stage_result.h"
+#include "quad_extraction/layout_quads.h"
+#include "quad_extraction/quad_extraction.h"
+#include "quad_extraction/untangle_quads.h"
+#include "quantization/quantization.h"
+#include "quantization/round_quantization.h"
+#include "seamless_map/seamless_map.h"
+#include "tmesh/tmesh.h"
+
+namespace qgp {
+
+// Stage 2: the seamless map made exact (features and boundary on exact isolines) and its T-mesh.
+struct TracedMap {
+  std::vector<char> isoline_edges;  // #E: feature and boundary edges kept as isolines
+  ExactParametrization exact;       // the seamless map, exact
+  TMesh tmesh;
+};
+
+// Stage 3: integer T-edge lengths.
+struct Quantized {
+  QuantizationResult result;
+  int fold_rounds = 0;          // re-quantizations that kept folding zero edges at 1 (greedy)
+  int kept_positive_edges = 0;  // T-edges kept at length >= 1 by them
+  // The round baseline's rounded map: it is the integer-grid map of that quantization.
+  std::optional<RoundedMap> rounded;
+};
+
+// Stage 4: the integer-grid map (1 unit = 1 quad).
+struct IgmResult {
+  ExactParametrization map;
+  IgmStats stats;
+  bool escalated = false;  // every attempt the policy has for grid UVs ran (or none applies)
+};
+
+// The fallback map on the mesh with the T-mesh inserted (paper §7.1.1), where the global solve's
+// map stays flipped or wound.
+struct CellMapFallback {
+  bool ran = false;      // false: the integer-grid map did not need it
+  bool used = false;     // it has no flipped triangle and no wound one-ring: the run's uv map
+  std::string failure;   // why it could not be built (empty otherwise)
+  std::optional<CellMap> map;  // when used
+  CellMapStats stats;
+};
+
+// Where a component's quads come from.
+enum class QuadSource {
+  IntegerGridMap,  // extracted from the integer-grid map (QEx)
+  TMeshLayout,     // each quantized T-mesh cell as its w x h grid (quad_extraction/layout_quads)
+};
+const char* quad_source_name(QuadSource source);
+
+// Stage 5: the component's quads, and why they come from where they do.
+struct QuadChoice {
+  QuadExtraction extraction;
+  QuadSource source = QuadSource::IntegerGridMap;
+  std::string why_not_map;  // for TMeshLayout: why the integer-grid map's quads were not taken
+  LayoutQuadsStats layout;  // for TMeshLayout
+  UntangleStats untangle;   // flipped quads unfolded after extraction
+};
+
+struct SeamlessKey {
+  uint64_t cut = 0;
+  double edge_length = 0;  // target quad edge length the map was solved for (1 uv unit)
+  bool operator==(const SeamlessKey& o) const { return cut == o.cut && edge_length == o.edge_length; }
+};
+struct QuantizationKey {
+  uint64_t traced = 0;
+  double scale = 0;  // quads per seamless uv unit
+  Quantizer quantizer = Quantizer::Greedy;
+  bool operator==(const QuantizationKey& o) const {
+    return traced == o.traced && scale == o.scale && quantizer == o.quantizer;
+  }
+};
+
+struct ComponentState {
+  // The component, fixed once prepared (a new one is prepared when features or the working
+  // resolution change).
+  TriMesh mesh;                     // the component as its own mesh (the working mesh if decimated)
+  std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
+  std::vector<int> face_map;        // component face -> intake mesh face (-1 when decimated)
+  std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
+  int euler_characteristic = 0;     // of the intake component
+  // A dense component of a remesh job is decimated to a working resolution for the target; the
+  // quads are projected back onto the full-resolution component kept here.
+  std::optional<TriMesh> full_mesh;
+  std::vector<int> full_face_map;        // full_mesh face -> intake mesh face
+  std::vector<char> full_feature_edges;  // #E of full_mesh
+  int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)
+
+  // Stage results; each key names what it was computed from.
+  StageResult<CrossField, std::tuple<>> field;
+  StageResult<CutGraph, uint64_t> cut;             // field
+  StageResult<SeamlessMap, SeamlessKey> seamless;  // cut, edge length
+  StageResult<TracedMap, uint64_t> traced;         // seamless
+  StageResult<Quantized, QuantizationKey> quantization;
+  StageResult<IgmResult, uint64_t> igm;            // quantization
+  StageResult<CellMapFallback, uint64_t> cell_map;  // igm
+  StageResult<QuadChoice, uint64_t> quads;         // igm
+
+  // Model units per uv unit of the seamless map.
+  double seamless_edge_length() const { return seamless.key().edge_length; }
+  // The stored seamless map / integer-grid map was computed from the stored results before it
+  // (not so after a run that failed on the way).
+  bool seamless_is_current() const {
+    return seamless.has_value() && seamless.key().cut == cut.id() && cut.computed_from(field.id());
+  }
+  bool igm_is_current() const {
+    return igm.computed_from(quantization.id()) && quantization.has_value() &&
+           quantization.key().traced == traced.id() && traced.computed_from(seamless.id()) && seamless_is_current();
+  }
+};
+
+}  // namespace qgp

@@ -1,0 +1,278 @@
+#include "pipeline/policy.h"
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "igm/untangle_map.h"
+#include "metrics/quad_metrics.h"
+#include "quad_extraction/surface_projection.h"
+
+namespace qgp {
+namespace {
+
+// Zero T-edges (x = 0) whose collapse folds the quad layout: those on the sides of the cells whose
+// layout quads are not manifold, and of the cells up to `rings` cells away. Empty when the
+// layout is a manifold quad mesh (the connectivity every map with this quantization gives).
+std::vector<int> folding_zero_edges(const ComponentState& state, const std::vector<int64_t>& x, int rings) {
+  Progress quiet;
+  const TMesh& tm = state.traced->tmesh;
+  const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, tm, x, quiet, false);
+  const std::vector<char> bad = non_manifold_quads(layout.quads);
+  std::vector<char> in_region(tm.cells.size(), 0);
+  std::vector<int> region;
+  for (size_t q = 0; q < bad.size(); ++q)
+    if (bad[q] && !in_region[layout.quad_cell[q]]) {
+      in_region[layout.quad_cell[q]] = 1;
+      region.push_back(layout.quad_cell[q]);
+    }
+  if (region.empty()) return {};
+  for (int ring = 0, begin = 0; ring < rings; ++ring) {
+    const int end = static_cast<int>(region.size());
+    for (int i = begin; i < end; ++i)
+      for (const auto& side : tm.cells[region[i]].sides)
+        for (int e : side)
+          for (int c : tm.edges[e].cells)
+            if (c >= 0 && !in_region[c]) {
+              in_region[c] = 1;
+              region.push_back(c);
+            }
+    begin = end;
+  }
+  std::vector<int> edges;
+  for (int c : region)
+    for (const auto& side : tm.cells[c].sides)
+      for (int e : side)
+        if (x[e] == 0) edges.push_back(e);
+  return edges;
+}
+
+// The effort counters of every attempt so far (`latest`, the last attempt's stats) on the kept map.
+void count_every_attempt(IgmStats& kept, const IgmStats& latest) {
+  kept.penalty_iterations = latest.penalty_iterations;
+  kept.penalty_violation = latest.penalty_violation;
+  kept.ipopt_solves = latest.ipopt_solves;
+  kept.ipopt_iterations = latest.ipopt_iterations;
+  kept.seconds_solve = latest.seconds_solve;
+  kept.seconds_sanitize = latest.seconds_sanitize;
+}
+
+// Moves the map's vertices where flipped or degenerate triangles remain (igm/untangle_map).
+void untangle_remaining(const ComponentState& state, IntegerGridMap& map, Progress& progress) {
+  IgmStats& s = map.stats;
+  if (s.flipped_triangles + s.degenerate_triangles == 0) return;
+  const MapUntangleStats u = untangle_map(state.mesh, map.snapped_vertices, map.isolines, map.param, progress);
+  s.untangled_vertices = u.moved_vertices;
+  s.flipped_before_untangle = u.flipped_before;
+  s.degenerate_before_untangle = u.degenerate_before;
+  s.flipped_triangles = u.flipped_after;
+  s.degenerate_triangles = u.degenerate_after;
+  s.seconds += u.seconds;
+  s.winding_defects = count_exact_winding_defects(state.mesh, map.param, cone_quarter_turns(state.mesh, *state.field));
+}
+
+// Why a quad mesh is not a consistently oriented 2-manifold with Euler characteristic `euler`
+// ("" when it is).
+std::string quad_mesh_defects(const QuadTopology& t, int euler) {
+  std::string defects;
+  auto add = [&](int count, const char* what) {
+    if (count > 0) defects += (defects.empty() ? "" : "; ") + std::to_string(count) + " " + what;
+  };
+  add(t.non_manifold_edges, "non-manifold edge(s)");
+  add(t.inconsistent_edges, "inconsistently oriented edge(s)");
+  add(t.degenerate_quads, "degenerate quad(s)");
+  if (defects.empty() && t.euler_characteristic != euler)
+    defects = "Euler characteristic " + std::to_string(t.euler_characteristic) + " instead of " + std::to_string(euler);
+  return defects;
+}
+
+// Unfolds flipped quads on the working mesh, then, projected back, on the input surface.
+UntangleStats untangle_on_surface(const ComponentState& state, QuadMesh& quads, Progress& progress) {
+  UntangleStats stats = untangle_flipped_quads(quads, state.mesh, state.field->feature_edge, progress);
+  if (state.full_mesh) {
+    project_to_surface(quads, *state.full_mesh, progress);
+    quads.quad_face.resize(quads.num_quads());
+    for (int q = 0; q < quads.num_quads(); ++q) quads.quad_face[q] = quads.vertex_face[quads.Q(q, 0)];
+    const UntangleStats projected = untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
+    stats.flipped_after = projected.flipped_after;
+    stats.moved_vertices += projected.moved_vertices;
+    stats.seconds += projected.seconds;
+  }
+  return stats;
+}
+
+// The integer-grid map's quads, untangled, when the map is regular and they form a valid mesh;
+// otherwise nothing, and *why_not says why.
+std::optional<QuadChoice> quads_of_the_map(const ComponentState& state, Progress& progress, std::string* why_not) {
+  const IgmStats& igm = state.igm->stats;
+  if (irregular_elements(igm) > 0) {
+    *why_not = std::to_string(igm.flipped_triangles) + " flipped and " + std::to_string(igm.degenerate_triangles) +
+               " degenerate triangle(s) and " + std::to_string(igm.winding_defects) +
+               " wound one-ring(s) in the integer-grid map";
+    return std::nullopt;
+  }
+  try {
+    QuadChoice choice;
+    choice.extraction = extract_quads(state.mesh, state.igm->map, QuadExtractionOptions{}, progress);
+    *why_not = quad_mesh_defects(quad_topology(choice.extraction.quads), state.euler_characteristic);
+    if (!why_not->empty()) return std::nullopt;
+    choice.source = QuadSource::IntegerGridMap;
+    choice.untangle = untangle_on_surface(state, choice.extraction.quads, progress);
+    return choice;
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::StageFailed) throw;
+    *why_not = e.what();
+    return std::nullopt;
+  }
+}
+
+// The quantized T-mesh layout's quads, untangled, when they form a valid mesh; otherwise nothing,
+// and *defects says why (*collapsed: they form a manifold, oriented mesh of another topology).
+std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progress& progress, std::string* defects,
+                                              bool* collapsed) {
+  LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
+                                            state.quantization->result.x, progress);
+  const QuadTopology topology = quad_topology(layout.quads);
+  *defects = quad_mesh_defects(topology, state.euler_characteristic);
+  *collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;
+  if (!defects->empty()) return std::nullopt;
+  QuadChoice choice;
+  choice.source = QuadSource::TMeshLayout;
+  choice.extraction.quads = std::move(layout.quads);
+  choice.extraction.stats.expected_quads = layout.stats.quads;
+  choice.extraction.stats.seconds = layout.stats.seconds;
+  for (char s : choice.extraction.quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
+  choice.layout = layout.stats;
+  choice.untangle = untangle_on_surface(state, choice.extraction.quads, progress);
+  return choice;
+}
+
+}  // namespace
+
+bool seamless_map_serves(double solved_for, double edge_length) {
+  const double rescale = solved_for / edge_length;
+  return std::max(rescale, 1 / rescale) <= kMaxSeamlessRescale * (1 + 1e-9);
+}
+
+Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress) {
+  const TMesh& tmesh = state.traced->tmesh;
+  QuantizationOptions options;
+  options.scale = scale;
+  Quantized q;
+  q.result = quantize(tmesh, options, progress);
+  for (int round = 0; round < kMaxFoldRounds; ++round) {
+    const std::vector<int> edges = folding_zero_edges(state, q.result.x, round);
+    if (edges.empty()) break;
+    options.min_length.resize(tmesh.edges.size(), 0);
+    for (int e : edges) options.min_length[e] = 1;
+    q.result = quantize(tmesh, options, progress);
+    q.fold_rounds = round + 1;
+  }
+  for (int64_t m : options.min_length) q.kept_positive_edges += static_cast<int>(m);
+  return q;
+}
+
+bool escalates_integer_grid_map(Job job) { return job == Job::GridUV; }
+
+bool integer_grid_map_serves(const IgmResult& map, bool escalate) {
+  return !escalate || map.escalated || irregular_elements(map.stats) == 0;
+}
+
+int irregular_elements(const IgmStats& s) { return s.flipped_triangles + s.degenerate_triangles + s.winding_defects; }
+
+IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress) {
+  Timer timer;
+  IgmOptions options;
+  options.edge_length = state.seamless_edge_length();
+  IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
+                              state.traced->tmesh, state.quantization->result, options, progress);
+  IntegerGridMap map = solver.solve(IgmAttempt::Default, 0, 0.4);
+  map.stats.path = "global (penalty without regularity)";
+  IgmStats latest = map.stats;
+  if (escalate && irregular_elements(map.stats) > 0) {
+    const int before = irregular_elements(map.stats);
+    IntegerGridMap relinearized = solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
+    latest = relinearized.stats;
+    if (irregular_elements(relinearized.stats) < before) {
+      map = std::move(relinearized);
+      map.stats.path = "global (penalty with regularity; " + std::to_string(before) +
+                       " irregular triangles or one-rings without)";
+    }
+  }
+  if (escalate && irregular_elements(map.stats) > 0) {
+    const int before = irregular_elements(map.stats);
+    IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
+    latest = all_faces.stats;
+    if (irregular_elements(all_faces.stats) < before) {
+      map = std::move(all_faces);
+      map.stats.fallback_used = true;
+      map.stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
+    } else {
+      map.stats.path = "global (all-faces fallback did not help)";
+    }
+  }
+  count_every_attempt(map.stats, latest);
+  map.stats.seconds = timer.seconds();
+  progress.update(1.0);
+  untangle_remaining(state, map, progress);
+  return IgmResult{std::move(map.param), std::move(map.stats), escalate};
+}
+
+IgmResult rounded_integer_grid_map(const RoundedMap& rounded) {
+  IgmResult r;
+  r.map = rounded.param;
+  r.stats.path = "round";
+  r.stats.flipped_triangles = rounded.flipped_triangles;
+  r.stats.degenerate_triangles = rounded.degenerate_triangles;
+  r.stats.unresolved_equations = rounded.unresolved_equations;
+  r.escalated = true;
+  return r;
+}
+
+CellMapFallback fallback_cell_map(const ComponentState& state, Progress& progress) {
+  CellMapFallback fallback;
+  const IgmStats& s = state.igm->stats;
+  if (s.flipped_triangles + s.winding_defects == 0) return fallback;
+  fallback.ran = true;
+  try {
+    CellMapOptions options;
+    options.cone_turns = cone_quarter_turns(state.mesh, *state.field);
+    CellMap map = map_cells_to_rectangles(state.mesh, state.traced->tmesh, state.quantization->result.x, progress, options);
+    fallback.stats = map.stats;
+    fallback.used = map.stats.flipped_triangles + map.stats.wound_vertices == 0;
+    if (fallback.used) fallback.map = std::move(map);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::StageFailed) throw;
+    fallback.failure = e.what();
+  }
+  return fallback;
+}
+
+const CellMap* cell_map_in_use(const ComponentState& state) {
+  if (!state.cell_map.computed_from(state.igm.id()) || !state.cell_map->map) return nullptr;
+  return &*state.cell_map->map;
+}
+
+QuadChoice choose_quads(const ComponentState& state, Progress& progress) {
+  std::string why_not_map;
+  std::optional<QuadChoice> chosen = quads_of_the_map(state, progress, &why_not_map);
+  if (chosen && chosen->untangle.flipped_after == 0) return std::move(*chosen);
+  std::string defects;
+  bool collapsed = false;
+  std::optional<QuadChoice> layout = quads_of_the_layout(state, progress, &defects, &collapsed);
+  if (!chosen && !layout)
+    throw Error(ErrorCode::StageFailed,
+                "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written" +
+                    (collapsed ? ". A hole or handle of this part is narrower than one quad: try more quads" : ""));
+  if (layout && (!chosen || layout->untangle.flipped_after < chosen->untangle.flipped_after)) {
+    if (chosen)
+      why_not_map = std::to_string(chosen->untangle.flipped_after) + " of the integer-grid map's quads stay flipped";
+    layout->why_not_map = why_not_map;
+    return std::move(*layout);
+  }
+  return std::move(*chosen);
+}
+
+}  // namespace qgp

@@ -1,0 +1,73 @@
+// The pipeline's decisions. Every fallback that keeps the output valid is a ladder here, one
+// function each, read top to bottom; each result says which rung it ended on. The stages under
+// native/src compute; only this file chooses between their results.
+//
+//   quantization   quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
+//                                           the quad layout kept at length 1, quantized again
+//   integer-grid   solve_integer_grid_map   default solve; for grid UVs the re-linearized penalty
+//   map                                     phase and the all-faces solve; then the map untangle
+//   uv map         fallback_cell_map        where the map stays flipped or wound: the §7.1.1 cell
+//                                           map, used when it is flip-free and unwound
+//   quads          choose_quads             the map's quads when the map is regular and they form a
+//                                           valid mesh; else (or when fewer stay flipped) the
+//                                           T-mesh layout's quads; else a refusal naming why
+#pragma once
+#include "core/progress.h"
+#include "pipeline/component_state.h"
+#include "pipeline/options.h"
+
+namespace qgp {
+
+// A new remesh density keeps a decimated working mesh until it needs a budget more than this many
+// times the one the mesh was made for...
+constexpr int kMaxWorkingBudgetGrowth = 4;
+// ...and the seamless map until the target edge length is more than this many times shorter or
+// longer than the one the map was solved for (rescaled further, the solver's tolerances no longer
+// match the grid and results drift from a fresh run's).
+constexpr double kMaxSeamlessRescale = 2;
+// Re-quantizations against a folding layout.
+constexpr int kMaxFoldRounds = 8;
+
+// True when a seamless map solved for `solved_for` serves a run at `edge_length` (rescaled).
+bool seamless_map_serves(double solved_for, double edge_length);
+
+// Greedy quantization of the component's T-mesh at `scale`. A valid quantization can still
+// collapse cells so that the layout folds (a regular point between two quads only, two quads on
+// both sides of one edge): the zero edges there, and in a widening ring of cells around, are kept
+// at length 1 and the T-mesh is quantized again, up to kMaxFoldRounds times.
+Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress);
+
+// Quads have a fallback (the T-mesh layout), grid UVs do not: only grid-UV jobs pay for the
+// integer-grid map's escalating attempts.
+bool escalates_integer_grid_map(Job job);
+// True when a stored map serves a job that does (escalate) or does not escalate.
+bool integer_grid_map_serves(const IgmResult& map, bool escalate);
+
+// The component's integer-grid map: the default attempt; when `escalate` and the map has flipped
+// or degenerate triangles or wound one-rings, the re-linearized penalty attempt, then the
+// all-faces attempt, each kept only if it has fewer; finally the map untangle moves vertices where
+// flipped or degenerate triangles remain. stats.path tells the rungs taken.
+IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress);
+
+// The round baseline's rounded map as the integer-grid map (no attempt applies).
+IgmResult rounded_integer_grid_map(const RoundedMap& rounded);
+
+// Flipped and degenerate triangles and wound one-rings of an integer-grid map.
+int irregular_elements(const IgmStats& stats);
+
+// Where the integer-grid map keeps flipped triangles or wound one-rings: the §7.1.1 cell map,
+// used when it has neither (degenerate triangles alone do not call for it: its collapsed cells
+// have many more). A cell map that cannot be built is reported, not thrown.
+CellMapFallback fallback_cell_map(const ComponentState& state, Progress& progress);
+
+// The map a grid-UV output of the component uses: the cell map where one was built and used for
+// the current integer-grid map; null: the integer-grid map itself.
+const CellMap* cell_map_in_use(const ComponentState& state);
+
+// The component's quads: those of the integer-grid map when it is regular and they form a
+// consistently oriented 2-manifold of the component's Euler characteristic; otherwise, or when
+// some stay flipped after the untangle, those of the quantized T-mesh layout (kept if valid and
+// fewer stay flipped). Throws Error(StageFailed) naming why when neither is valid.
+QuadChoice choose_quads(const ComponentState& state, Progress& progress);
+
+}  // namespace qgp

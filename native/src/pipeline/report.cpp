@@ -1,0 +1,172 @@
+#include "pipeline/report.h"
+
+#include <algorithm>
+#include <string>
+
+#include "intake/working_mesh.h"
+#include "tmesh/tmesh_system.h"
+
+namespace qgp {
+
+void to_json(Json& j, const CellMapFallback& fallback) {
+  if (!fallback.ran) {
+    j = nullptr;
+  } else if (!fallback.failure.empty()) {
+    j = {{"used", false}, {"failure", fallback.failure}};
+  } else {
+    j = fallback.stats;
+    j["used"] = fallback.used;
+  }
+}
+
+const char* quad_source_name(QuadSource source) {
+  return source == QuadSource::IntegerGridMap ? "integer-grid map" : "T-mesh layout";
+}
+
+void to_json(Json& j, const QuadChoice& choice) {
+  j = choice.extraction.stats;
+  j["path"] = choice.source == QuadSource::IntegerGridMap
+                  ? std::string(quad_source_name(choice.source))
+                  : std::string(quad_source_name(choice.source)) + " (" + choice.why_not_map + ")";
+  if (choice.source == QuadSource::TMeshLayout) j["layout"] = choice.layout;
+  j["untangle"] = choice.untangle;
+}
+
+Json working_mesh_report(const std::vector<ComponentState>& components) {
+  int decimated = 0, input_faces = 0, working_faces = 0;
+  for (const ComponentState& state : components) {
+    decimated += state.full_mesh.has_value();
+    input_faces += state.full_mesh ? state.full_mesh->num_faces() : state.mesh.num_faces();
+    working_faces += state.mesh.num_faces();
+  }
+  return {{"decimated_components", decimated},
+          {"input_faces", input_faces},
+          {"working_faces", working_faces},
+          {"faces_per_quad", kWorkingFacesPerQuad},
+          {"min_faces", kMinWorkingFaces}};
+}
+
+Json field_report(const std::vector<ComponentState>& components) {
+  // index_sum is in full index units (quarter turns / 4) so that it reads as the Euler characteristic.
+  Json per_component = Json::array();
+  int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0, overconstrained = 0,
+      collapsed = 0;
+  for (const ComponentState& state : components) {
+    const CrossField& field = *state.field;
+    int features = 0;
+    for (char f : field.feature_edge) features += f;
+    per_component.push_back({{"faces", state.mesh.num_faces()},
+                             {"singularities", field.num_singularities},
+                             {"index_sum", field.index_sum / 4},
+                             {"euler_characteristic", field.euler_characteristic},
+                             {"feature_edges", features},
+                             {"overconstrained_faces", field.num_overconstrained_faces},
+                             {"collapsed_sectors", field.num_collapsed_sectors},
+                             {"cut_edges", state.cut->num_cut_edges}});
+    singularities += field.num_singularities;
+    index_quarters += field.index_sum;
+    euler += field.euler_characteristic;
+    feature_edges += features;
+    cut_edges += state.cut->num_cut_edges;
+    overconstrained += field.num_overconstrained_faces;
+    collapsed += field.num_collapsed_sectors;
+  }
+  return {{"singularities", singularities},
+          {"index_sum", index_quarters / 4},
+          {"euler_characteristic", euler},
+          {"feature_edges", feature_edges},
+          {"overconstrained_faces", overconstrained},
+          {"collapsed_sectors", collapsed},
+          {"cut_edges", cut_edges},
+          {"components", std::move(per_component)}};
+}
+
+Json seamless_report(const std::vector<ComponentState>& components, double edge_length) {
+  Json per_component = Json::array();
+  int flipped = 0, degenerate = 0, iterations = 0;
+  double residual = 0, energy = 0;
+  for (const ComponentState& state : components) {
+    const SeamlessMapStats& s = state.seamless->stats;
+    per_component.push_back(s);
+    flipped += s.flipped_triangles;
+    degenerate += s.degenerate_triangles;
+    iterations += s.ipopt_iterations;
+    residual = std::max(residual, s.max_transition_residual);
+    energy += s.energy;
+  }
+  Json j = {{"flipped_triangles", flipped},
+            {"degenerate_triangles", degenerate},
+            {"max_transition_residual", residual},
+            {"energy", energy},
+            {"ipopt_iterations", iterations},
+            {"edge_length", components.empty() ? edge_length : components[0].seamless_edge_length()},
+            {"components", std::move(per_component)}};
+  if (flipped + degenerate > 0)
+    j["warnings"].push_back(std::to_string(flipped) + " flipped and " + std::to_string(degenerate) +
+                            " degenerate triangle(s) remain in the seamless map");
+  return j;
+}
+
+Json tmesh_report(const std::vector<ComponentState>& components) {
+  Json per_component = Json::array();
+  for (const ComponentState& state : components) per_component.push_back(state.traced->tmesh);
+  Json total = {{"nodes", 0}, {"edges", 0}, {"cells", 0}, {"singular_nodes", 0}};
+  for (const Json& r : per_component)
+    for (auto& [key, value] : total.items()) value = value.get<int64_t>() + r.value(key, int64_t(0));
+  total["components"] = std::move(per_component);
+  return total;
+}
+
+Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer) {
+  Json per_component = Json::array();
+  int64_t quads = 0;
+  for (const ComponentState& state : components) {
+    const Quantized& q = *state.quantization;
+    quads += q.result.quads_expected;
+    per_component.push_back(q.result);
+    per_component.back()["fold_rounds"] = q.fold_rounds;
+    per_component.back()["kept_positive_edges"] = q.kept_positive_edges;
+  }
+  return {{"method", quantizer_name(quantizer)}, {"quads_expected", quads}, {"components", std::move(per_component)}};
+}
+
+Json igm_report(const std::vector<ComponentState>& components) {
+  Json per_component = Json::array();
+  int flipped = 0, degenerate = 0, wound = 0, fallbacks = 0, cell_maps = 0;
+  double residual = 0;
+  for (const ComponentState& state : components) {
+    const IgmStats& s = state.igm->stats;
+    const bool cell_map = state.cell_map.computed_from(state.igm.id()) && state.cell_map->ran;
+    flipped += s.flipped_triangles;
+    degenerate += s.degenerate_triangles;
+    wound += s.winding_defects;
+    fallbacks += s.fallback_used;
+    cell_maps += cell_map && state.cell_map->used;
+    residual = std::max(residual, s.max_integer_residual);
+    per_component.push_back(s);
+    if (cell_map) per_component.back()["cell_map"] = *state.cell_map;
+  }
+  return {{"flipped_triangles", flipped},
+          {"degenerate_triangles", degenerate},
+          {"winding_defects", wound},
+          {"max_integer_residual", residual},
+          {"fallback_used", fallbacks + cell_maps > 0},
+          {"cell_map_components", cell_maps},
+          {"components", std::move(per_component)}};
+}
+
+Json extraction_report(const std::vector<ComponentState>& components, Json& igm) {
+  Json per_component = Json::array();
+  int from_layout = 0;
+  for (const ComponentState& state : components) {
+    per_component.push_back(*state.quads);
+    from_layout += state.quads->source == QuadSource::TMeshLayout;
+  }
+  if (from_layout > 0) {
+    igm["fallback_used"] = true;
+    igm["fallback"] = "quads of the T-mesh layout in " + std::to_string(from_layout) + " component(s)";
+  }
+  return {{"layout_components", from_layout}, {"components", std::move(per_component)}};
+}
+
+}  // namespace qgp
