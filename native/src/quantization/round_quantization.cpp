@@ -54,19 +54,14 @@ std::vector<char> independent_vertices(const TriMesh& mesh, const Parametrizatio
   return snap;
 }
 
-RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& param,
-                                 const std::vector<char>& feature_edges, const std::vector<char>& snap_vertices,
-                                 double scale, int fraction_bits) {
-  const int nv = mesh.num_vertices(), nf = mesh.num_faces(), nc = 3 * nf;
-  if (param.uv.rows() != nc || static_cast<int>(param.rotation.size()) != nc ||
-      static_cast<int>(snap_vertices.size()) != nv || (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges()))
-    throw Error(ErrorCode::InvalidArgument, "rounding: parametrization, features or vertex flags do not match the mesh");
-  if (!(scale > 0) || !std::isfinite(scale)) throw Error(ErrorCode::InvalidArgument, "rounding: invalid scale");
+namespace {
 
-  Parametrization scaled = param;
-  scaled.uv *= scale;
-
-  // Feature and boundary edges are isolines: the coordinate that is constant along each.
+// Sanitization options of the rounding: integer snapping of snap_vertices, and feature and
+// boundary edges as isolines (the coordinate that is constant along each, per corner).
+SanitizeOptions isoline_snap_options(const TriMesh& mesh, const Parametrization& scaled,
+                                     const std::vector<char>& feature_edges, const std::vector<char>& snap_vertices,
+                                     int fraction_bits) {
+  const int nc = 3 * mesh.num_faces();
   SanitizeOptions options;
   options.fraction_bits = fraction_bits;
   options.snap_bits = 0;
@@ -81,81 +76,124 @@ RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& par
     options.snap_corner_axes[3 * f + a] |= bit;
     options.snap_corner_axes[3 * f + b] |= bit;
   }
+  return options;
+}
 
-  // 1. Round the independent variables, derive the dependent ones exactly.
-  const SanitizeResult rounded = sanitize_parametrization(mesh, scaled, options);
-  const ExactParametrization& s1 = rounded.param;
-  const double unit = std::ldexp(1.0, -fraction_bits);
+// One (u,v) unknown per vertex in the chart of a reference corner; corner c of vertex v has value
+// R_c W_v + t_c with the exact transitions of the rounded map.
+struct VertexCharts {
+  std::vector<int> corner_rotation;       // 3#F: r of R_c
+  std::vector<IVec2> corner_translation;  // 3#F: t_c (grid units)
+  std::vector<int> reference;             // #V: reference corner, -1 for an isolated vertex
+};
 
-  // 2. Solve again with them fixed. Unknowns: one (u,v) per vertex in the chart of a reference
-  // corner; corner c of vertex v has value R_c W_v + t_c with the exact transitions of s1.
-  std::vector<int> corner_rotation(nc, 0);
-  std::vector<IVec2> corner_translation(nc, IVec2{0, 0});
-  std::vector<int> reference(nv, -1);
+// The chart of every corner relative to its vertex's reference corner, from s1's transitions.
+VertexCharts vertex_charts(const TriMesh& mesh, const ExactParametrization& s1) {
+  const int nv = mesh.num_vertices(), nc = 3 * mesh.num_faces();
+  VertexCharts charts;
+  charts.corner_rotation.assign(nc, 0);
+  charts.corner_translation.assign(nc, IVec2{0, 0});
+  charts.reference.assign(nv, -1);
   for (int v = 0; v < nv; ++v) {
     const std::vector<int> out = outgoing_halfedges(mesh, v);
     if (out.empty()) continue;
-    reference[v] = out[0];  // halfedge h starts at corner h of its face
+    charts.reference[v] = out[0];  // halfedge h starts at corner h of its face
     for (size_t i = 0; i + 1 < out.size(); ++i) {
       const int p = TriMesh::prev(out[i]);  // crossed going counter-clockwise
       const int r = s1.rotation[p];
-      const IVec2 t = rotate_quarter(corner_translation[out[i]], r);
-      corner_rotation[out[i + 1]] = (corner_rotation[out[i]] + r) % 4;
-      corner_translation[out[i + 1]] = {t[0] + s1.translation[p][0], t[1] + s1.translation[p][1]};
+      const IVec2 t = rotate_quarter(charts.corner_translation[out[i]], r);
+      charts.corner_rotation[out[i + 1]] = (charts.corner_rotation[out[i]] + r) % 4;
+      charts.corner_translation[out[i + 1]] = {t[0] + s1.translation[p][0], t[1] + s1.translation[p][1]};
     }
   }
-  std::vector<char> fixed(2 * nv, 0);
-  std::vector<double> value(2 * nv, 0);
+  return charts;
+}
+
+// The 2#V vertex unknowns of the re-solve: which are fixed, and the values of the fixed ones.
+struct FixedValues {
+  std::vector<char> fixed;
+  std::vector<double> value;
+};
+
+// Fixes isolated vertices, the snapped vertices and the snapped axes of corners at their rounded
+// values in s1 (unit: parameter units per grid unit).
+FixedValues rounded_fixed_values(const TriMesh& mesh, const ExactParametrization& s1, const VertexCharts& charts,
+                                 const std::vector<char>& snap_vertices,
+                                 const std::vector<uint8_t>& snap_corner_axes, double unit) {
+  const int nv = mesh.num_vertices(), nc = 3 * mesh.num_faces();
+  FixedValues fv{std::vector<char>(2 * nv, 0), std::vector<double>(2 * nv, 0)};
+  std::vector<char>& fixed = fv.fixed;
+  std::vector<double>& value = fv.value;
   for (int v = 0; v < nv; ++v) {
-    if (reference[v] < 0) {  // isolated vertex
+    if (charts.reference[v] < 0) {  // isolated vertex
       fixed[2 * v] = fixed[2 * v + 1] = 1;
       continue;
     }
     if (!snap_vertices[v]) continue;
-    const IVec2 p = s1.uv[reference[v]];
+    const IVec2 p = s1.uv[charts.reference[v]];
     fixed[2 * v] = fixed[2 * v + 1] = 1;
     value[2 * v] = p[0] * unit, value[2 * v + 1] = p[1] * unit;
   }
   for (int c = 0; c < nc; ++c)
     for (int a = 0; a < 2; ++a) {
-      if (!((options.snap_corner_axes[c] >> a) & 1)) continue;
+      if (!((snap_corner_axes[c] >> a) & 1)) continue;
       const int v = mesh.F(c / 3, c % 3);
-      const RotatedComponent rc = rotated_component(corner_rotation[c], a);
+      const RotatedComponent rc = rotated_component(charts.corner_rotation[c], a);
       fixed[2 * v + rc.index] = 1;
-      value[2 * v + rc.index] = rc.sign * static_cast<double>(s1.uv[c][a] - corner_translation[c][a]) * unit;
+      value[2 * v + rc.index] = rc.sign * static_cast<double>(s1.uv[c][a] - charts.corner_translation[c][a]) * unit;
     }
-  // A component without any fixed vertex would float: pin its first vertex where it is.
-  {
-    std::vector<int> parent(nv);
-    for (int v = 0; v < nv; ++v) parent[v] = v;
-    auto find = [&](int x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) parent[find(mesh.F(f, k))] = find(mesh.F(f, (k + 1) % 3));
-    std::vector<char> anchored(nv, 0);
-    for (int v = 0; v < nv; ++v)
-      if (fixed[2 * v] && fixed[2 * v + 1]) anchored[find(v)] = 1;
-    for (int v = 0; v < nv; ++v)
-      if (!anchored[find(v)] && reference[v] >= 0) {
-        anchored[find(v)] = 1;
-        const IVec2 p = s1.uv[reference[v]];
-        fixed[2 * v] = fixed[2 * v + 1] = 1;
-        value[2 * v] = p[0] * unit, value[2 * v + 1] = p[1] * unit;
-      }
-  }
-  std::vector<int> free_index(2 * nv, -1);
-  int nfree = 0;
-  for (int i = 0; i < 2 * nv; ++i)
-    if (!fixed[i]) free_index[i] = nfree++;
+  return fv;
+}
 
+// Pins the first vertex of every component without a fully fixed vertex where it is in s1.
+void pin_floating_components(const TriMesh& mesh, const ExactParametrization& s1, const VertexCharts& charts,
+                             double unit, FixedValues& fv) {
+  // A component without any fixed vertex would float: pin its first vertex where it is.
+  const int nv = mesh.num_vertices(), nf = mesh.num_faces();
+  std::vector<int> parent(nv);
+  for (int v = 0; v < nv; ++v) parent[v] = v;
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) parent[find(mesh.F(f, k))] = find(mesh.F(f, (k + 1) % 3));
+  std::vector<char> anchored(nv, 0);
+  for (int v = 0; v < nv; ++v)
+    if (fv.fixed[2 * v] && fv.fixed[2 * v + 1]) anchored[find(v)] = 1;
+  for (int v = 0; v < nv; ++v)
+    if (!anchored[find(v)] && charts.reference[v] >= 0) {
+      anchored[find(v)] = 1;
+      const IVec2 p = s1.uv[charts.reference[v]];
+      fv.fixed[2 * v] = fv.fixed[2 * v + 1] = 1;
+      fv.value[2 * v] = p[0] * unit, fv.value[2 * v + 1] = p[1] * unit;
+    }
+}
+
+// Normal equations of the least-squares re-solve, restricted to the free unknowns.
+struct ReducedSystem {
+  std::vector<int> free_index;  // 2#V: row/column of each free unknown, -1 for fixed ones
+  int nfree = 0;
   std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nfree);
+  Eigen::VectorXd rhs;
+};
+
+// Assembles the deviation of the map from the continuous map's per-triangle edge vectors
+// (cotangent weights), the fixed unknowns moved to the right-hand side.
+ReducedSystem assemble_reduced_system(const TriMesh& mesh, const Parametrization& scaled, const VertexCharts& charts,
+                                      const FixedValues& fv, double unit) {
+  const int nv = mesh.num_vertices(), nf = mesh.num_faces();
+  ReducedSystem sys;
+  sys.free_index.assign(2 * nv, -1);
+  for (int i = 0; i < 2 * nv; ++i)
+    if (!fv.fixed[i]) sys.free_index[i] = sys.nfree++;
+  const std::vector<int>& free_index = sys.free_index;
+  Eigen::VectorXd& rhs = sys.rhs;
+  rhs = Eigen::VectorXd::Zero(sys.nfree);
   auto add = [&](int row, int col, double a) {
     if (free_index[row] < 0) return;
-    if (free_index[col] >= 0) triplets.emplace_back(free_index[row], free_index[col], a);
-    else rhs[free_index[row]] -= a * value[col];
+    if (free_index[col] >= 0) sys.triplets.emplace_back(free_index[row], free_index[col], a);
+    else rhs[free_index[row]] -= a * fv.value[col];
   };
   for (int f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
@@ -167,10 +205,11 @@ RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& par
       const double w = 0.5 * a.dot(b) / cross;
       const int ci = 3 * f + i, cj = 3 * f + j;
       const int vi = mesh.F(f, i), vj = mesh.F(f, j);
-      const Eigen::Matrix2d Ri = rotation_matrix(corner_rotation[ci]), Rj = rotation_matrix(corner_rotation[cj]);
+      const Eigen::Matrix2d Ri = rotation_matrix(charts.corner_rotation[ci]);
+      const Eigen::Matrix2d Rj = rotation_matrix(charts.corner_rotation[cj]);
       const Vec2 target = scaled.corner(f, i) - scaled.corner(f, j);
-      const Vec2 b0 = Vec2(corner_translation[ci][0] - corner_translation[cj][0],
-                           corner_translation[ci][1] - corner_translation[cj][1]) * unit - target;
+      const Vec2 b0 = Vec2(charts.corner_translation[ci][0] - charts.corner_translation[cj][0],
+                           charts.corner_translation[ci][1] - charts.corner_translation[cj][1]) * unit - target;
       // E += w |Ri Wi - Rj Wj + b0|^2: gradient rows of Wi and Wj.
       const Eigen::Matrix2d cross_block = -Ri.transpose() * Rj;
       const Vec2 gi = Ri.transpose() * b0, gj = -Rj.transpose() * b0;
@@ -185,34 +224,53 @@ RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& par
         if (free_index[2 * vj + r] >= 0) rhs[free_index[2 * vj + r]] -= w * gj[r];
       }
     }
-  std::vector<double> solution(value);
-  if (nfree > 0) {
-    Eigen::SparseMatrix<double> H(nfree, nfree);
-    H.setFromTriplets(triplets.begin(), triplets.end());
+  return sys;
+}
+
+// All 2#V vertex unknowns: the fixed values, and the least-squares solution for the free ones.
+std::vector<double> solve_with_fixed_values(const TriMesh& mesh, const Parametrization& scaled,
+                                            const VertexCharts& charts, const FixedValues& fv, double unit) {
+  const int nv = mesh.num_vertices();
+  const ReducedSystem sys = assemble_reduced_system(mesh, scaled, charts, fv, unit);
+  std::vector<double> solution(fv.value);
+  if (sys.nfree > 0) {
+    Eigen::SparseMatrix<double> H(sys.nfree, sys.nfree);
+    H.setFromTriplets(sys.triplets.begin(), sys.triplets.end());
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(H);
     if (solver.info() != Eigen::Success)
       throw Error(ErrorCode::StageFailed, "rounding: the re-solve with fixed integer variables is singular");
-    const Eigen::VectorXd x = solver.solve(rhs);
+    const Eigen::VectorXd x = solver.solve(sys.rhs);
     for (int i = 0; i < 2 * nv; ++i)
-      if (free_index[i] >= 0) solution[i] = x[free_index[i]];
+      if (sys.free_index[i] >= 0) solution[i] = x[sys.free_index[i]];
   }
+  return solution;
+}
+
+// The continuous map of the vertex values (corner c: R_c W_v + t_c) with s1's transitions.
+Parametrization map_of_vertex_values(const TriMesh& mesh, const ExactParametrization& s1, const VertexCharts& charts,
+                                     const std::vector<double>& solution, double unit) {
+  const int nc = 3 * mesh.num_faces();
   Parametrization resolved;
   resolved.uv.resize(nc, 2);
   for (int c = 0; c < nc; ++c) {
     const int v = mesh.F(c / 3, c % 3);
-    const Vec2 p = rotation_matrix(corner_rotation[c]) * Vec2(solution[2 * v], solution[2 * v + 1]) +
-                   Vec2(corner_translation[c][0], corner_translation[c][1]) * unit;
+    const Vec2 p = rotation_matrix(charts.corner_rotation[c]) * Vec2(solution[2 * v], solution[2 * v + 1]) +
+                   Vec2(charts.corner_translation[c][0], charts.corner_translation[c][1]) * unit;
     resolved.uv.row(c) = p.transpose();
   }
   resolved.rotation = s1.rotation;
   resolved.is_cut = s1.is_cut;
+  return resolved;
+}
 
-  // 3. Exact form (the fixed values are integers already; sanitization keeps them).
-  const SanitizeResult exact = sanitize_parametrization(mesh, resolved, options);
+// The result: the exact map, its flipped / degenerate triangles and its largest change.
+RoundedMap rounded_map(const ExactParametrization& exact_map, const Parametrization& scaled,
+                       const std::vector<char>& snap_vertices, int unresolved_equations) {
+  const int nc = static_cast<int>(exact_map.uv.size()), nf = nc / 3;
   RoundedMap out;
-  out.param = exact.param;
+  out.param = exact_map;
   out.snapped_vertices = snap_vertices;
-  out.unresolved_equations = rounded.unresolved_equations + exact.unresolved_equations;
+  out.unresolved_equations = unresolved_equations;
   for (int f = 0; f < nf; ++f) {
     const int o = orient2d_exact(out.param.uv[3 * f], out.param.uv[3 * f + 1], out.param.uv[3 * f + 2]);
     out.flipped_triangles += o < 0;
@@ -222,6 +280,39 @@ RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& par
     for (int a = 0; a < 2; ++a)
       out.max_change = std::max(out.max_change, std::abs(out.param.to_double(out.param.uv[c][a]) - scaled.uv(c, a)));
   return out;
+}
+
+}  // namespace
+
+RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& param,
+                                 const std::vector<char>& feature_edges, const std::vector<char>& snap_vertices,
+                                 double scale, int fraction_bits) {
+  const int nv = mesh.num_vertices(), nf = mesh.num_faces(), nc = 3 * nf;
+  if (param.uv.rows() != nc || static_cast<int>(param.rotation.size()) != nc ||
+      static_cast<int>(snap_vertices.size()) != nv || (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges()))
+    throw Error(ErrorCode::InvalidArgument, "rounding: parametrization, features or vertex flags do not match the mesh");
+  if (!(scale > 0) || !std::isfinite(scale)) throw Error(ErrorCode::InvalidArgument, "rounding: invalid scale");
+
+  Parametrization scaled = param;
+  scaled.uv *= scale;
+  const SanitizeOptions options = isoline_snap_options(mesh, scaled, feature_edges, snap_vertices, fraction_bits);
+
+  // 1. Round the independent variables, derive the dependent ones exactly.
+  const SanitizeResult rounded = sanitize_parametrization(mesh, scaled, options);
+  const ExactParametrization& s1 = rounded.param;
+  const double unit = std::ldexp(1.0, -fraction_bits);
+
+  // 2. Solve again with them fixed. Unknowns: one (u,v) per vertex in the chart of a reference
+  // corner; corner c of vertex v has value R_c W_v + t_c with the exact transitions of s1.
+  const VertexCharts charts = vertex_charts(mesh, s1);
+  FixedValues fixed = rounded_fixed_values(mesh, s1, charts, snap_vertices, options.snap_corner_axes, unit);
+  pin_floating_components(mesh, s1, charts, unit, fixed);
+  const std::vector<double> solution = solve_with_fixed_values(mesh, scaled, charts, fixed, unit);
+  const Parametrization resolved = map_of_vertex_values(mesh, s1, charts, solution, unit);
+
+  // 3. Exact form (the fixed values are integers already; sanitization keeps them).
+  const SanitizeResult exact = sanitize_parametrization(mesh, resolved, options);
+  return rounded_map(exact.param, scaled, snap_vertices, rounded.unresolved_equations + exact.unresolved_equations);
 }
 
 RoundingResult quantize_by_rounding(const TriMesh& mesh, const Parametrization& param,
