@@ -488,6 +488,132 @@ int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feat
   return resolved;
 }
 
+// Constrained faces and the power field: fills field.num_overconstrained_faces and
+// field.constrained_face, the constrained faces' angles theta (own frames) and their power field
+// z_fixed. Returns the number of constrained faces.
+int constrain_faces(const TriMesh& mesh, const FaceFrames& fr, CrossField& field, std::vector<double>& theta,
+                    ComplexVector& z_fixed) {
+  const int nf = mesh.num_faces();
+  field.constrained_face.assign(nf, 0);
+  int num_constrained = 0;
+  for (int f = 0; f < nf; ++f) {
+    int count = 0;
+    for (int k = 0; k < 3; ++k) count += is_feature_halfedge(mesh, field.feature_edge, 3 * f + k);
+    field.num_overconstrained_faces += count == 3;
+  }
+  for (int f = 0; f < nf; ++f) field.constrained_face[f] = face_constraint(mesh, fr, field.feature_edge, f, &theta[f]);
+  constrain_acute_sectors(mesh, fr, field.feature_edge, field.constrained_face, theta);
+  for (int f = 0; f < nf; ++f)
+    if (field.constrained_face[f] != kFree) {
+      z_fixed[f] = std::polar(1.0, 4 * theta[f]);
+      ++num_constrained;
+    }
+  return num_constrained;
+}
+
+// Smoothest field on the free faces, solved in the proxy frames (constrained: one sparse system;
+// unconstrained: smallest eigenvector), turned back onto the true faces into theta.
+void solve_free_faces(const TriMesh& mesh, const FaceFrames& fr, const CrossField& field, int num_constrained,
+                      ComplexVector& z_fixed, std::vector<double>& theta, Progress& progress) {
+  const int nf = mesh.num_faces();
+  const ProxyFrames proxy = proxy_frames(mesh, fr, field.feature_edge);
+  for (int f = 0; f < nf; ++f)
+    if (field.constrained_face[f])
+      z_fixed[f] = std::polar(1.0, 4 * transfer_angle(theta[f], fr.e1[f], fr.e2[f], fr.normal[f], proxy.normal[f],
+                                                      proxy.e1[f], proxy.e2[f]));
+  progress.check_cancel();
+  const ComplexSparse A = smoothness_matrix(mesh, fr, proxy);
+  const ComplexVector z = num_constrained > 0 ? solve_constrained(A, field.constrained_face, z_fixed, progress)
+                                              : smallest_eigenvector(A, fr.area, progress);
+  for (int f = 0; f < nf; ++f)
+    if (!field.constrained_face[f])
+      theta[f] = transfer_angle(std::arg(z[f]) / 4, proxy.e1[f], proxy.e2[f], proxy.normal[f], fr.normal[f],
+                                fr.e1[f], fr.e2[f]);
+}
+
+// Isoline sectors of feature/boundary halfedges, each from its own face (nearest axis), into
+// field.edge_sector. Returns rho (3#F) = chart angle - sector * 90deg, in [-45deg, 45deg].
+std::vector<double> assign_edge_sectors(const TriMesh& mesh, const FaceFrames& fr, const std::vector<double>& theta,
+                                        CrossField& field) {
+  const int nh = mesh.num_halfedges();
+  field.edge_sector.assign(nh, -1);
+  std::vector<double> rho(nh, 0.0);
+  for (int h = 0; h < nh; ++h)
+    if (is_feature_halfedge(mesh, field.feature_edge, h))
+      field.edge_sector[h] =
+          static_cast<int8_t>(mod4(nearest_quarter(wrap_angle(fr.angle[h] - theta[h / 3]), &rho[h])));
+  return rho;
+}
+
+// Residual rotations across ordinary edges (they do not depend on the sectors); 0 elsewhere.
+std::vector<double> ordinary_edge_residuals(const TriMesh& mesh, const FaceFrames& fr, const std::vector<double>& theta,
+                                            const std::vector<char>& feature_edge) {
+  std::vector<double> eps(mesh.num_halfedges(), 0.0);
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0 || feature_edge[e]) continue;
+    nearest_quarter(wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]), &eps[h]);
+    eps[o] = -eps[h];
+  }
+  return eps;
+}
+
+// Matchings and the residual rotation eps[h] left after the quarter turns (the edge's chart
+// angle on the far side minus its chart angle here minus matching * 90deg). Ordinary edges:
+// nearest quarter turn, |eps| <= 45deg. Feature edges: the quarter turn that keeps both sides'
+// own sectors, q(o) = q(h) + r + 2, so |eps| = |rho(o) - rho(h)| <= 90deg.
+void compute_matchings(const TriMesh& mesh, const FaceFrames& fr, const std::vector<double>& theta,
+                       const std::vector<int>& shift, CrossField& field, std::vector<double>& eps) {
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
+    if (o < 0) continue;
+    const double mismatch = wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]);
+    int q;
+    if (field.feature_edge[e]) {
+      q = field.edge_sector[o] - field.edge_sector[h] - 2;
+      eps[h] = wrap_angle(mismatch - q * kQuarter);
+    } else {
+      q = nearest_quarter(mismatch, &eps[h]) + shift[h];
+      eps[h] = mismatch - q * kQuarter;
+    }
+    eps[o] = -eps[h];
+    field.matching[h] = static_cast<int8_t>(mod4(q));
+    field.matching[o] = static_cast<int8_t>(mod4(-q));
+  }
+}
+
+// Index = (angle defect - field rotation relative to parallel transport) / 90deg; on the
+// boundary the defect is the turning pi - sum(angles), corrected by how far the two boundary
+// edges are off their isolines. Every value is an integer up to rounding and they sum to 4 chi.
+// Fills field.vertex_index, num_collapsed_sectors, index_sum, num_singularities and
+// euler_characteristic; throws if the indices do not sum to 4 chi.
+void compute_vertex_indices(const TriMesh& mesh, const std::vector<double>& eps, const std::vector<double>& rho,
+                            CrossField& field) {
+  const int nf = mesh.num_faces(), ne = mesh.num_edges(), nv = mesh.num_vertices();
+  field.vertex_index.assign(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    const std::vector<int> fan = outgoing_halfedges(mesh, v);
+    const bool boundary = is_boundary_vertex(mesh, v);
+    double turning = boundary ? M_PI : 2 * M_PI;
+    for (size_t i = 0; i < fan.size(); ++i) {
+      turning -= corner_angle(mesh, fan[i]);
+      if (mesh.opposite[TriMesh::prev(fan[i])] >= 0) turning -= eps[TriMesh::prev(fan[i])];
+    }
+    if (boundary) turning += rho[TriMesh::prev(fan.back())] - rho[fan.front()];
+    field.vertex_index[v] = static_cast<int>(std::lround(turning / kQuarter));
+    field.num_collapsed_sectors += count_collapsed_sectors(mesh, field.feature_edge, fan, boundary, eps, rho);
+  }
+  for (int v = 0; v < nv; ++v) {
+    field.index_sum += field.vertex_index[v];
+    field.num_singularities += field.vertex_index[v] != 0;
+  }
+  field.euler_characteristic = nv - ne + nf;
+  if (field.index_sum != 4 * field.euler_characteristic)
+    throw Error(ErrorCode::StageFailed, "cross field: singularity indices sum to " + std::to_string(field.index_sum) +
+                                            " quarter turns instead of 4 * " +
+                                            std::to_string(field.euler_characteristic) + " (internal error)");
+}
+
 }  // namespace
 
 std::vector<int> cone_quarter_turns(const TriMesh& mesh, const CrossField& field) {
@@ -535,7 +661,7 @@ std::vector<char> detect_feature_edges(const TriMesh& mesh, const std::vector<ch
 }
 
 CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& options, Progress& progress) {
-  const int nf = mesh.num_faces(), ne = mesh.num_edges(), nh = mesh.num_halfedges(), nv = mesh.num_vertices();
+  const int nf = mesh.num_faces(), ne = mesh.num_edges(), nh = mesh.num_halfedges();
   if (nf == 0) throw Error(ErrorCode::InvalidMesh, "cross field: the mesh has no faces");
   if (!options.feature_edges.empty() && static_cast<int>(options.feature_edges.size()) != ne)
     throw Error(ErrorCode::InvalidArgument, "cross field: feature_edges has " +
@@ -546,112 +672,26 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
 
   field.feature_edge = detect_feature_edges(mesh, options.feature_edges, options.sharp_angle_deg);
 
-  // Constrained faces and the power field.
   std::vector<double> theta(nf, 0.0);
-  field.constrained_face.assign(nf, 0);
   ComplexVector z_fixed = ComplexVector::Zero(nf);
-  int num_constrained = 0;
-  for (int f = 0; f < nf; ++f) {
-    int count = 0;
-    for (int k = 0; k < 3; ++k) count += is_feature_halfedge(mesh, field.feature_edge, 3 * f + k);
-    field.num_overconstrained_faces += count == 3;
-  }
-  for (int f = 0; f < nf; ++f) field.constrained_face[f] = face_constraint(mesh, fr, field.feature_edge, f, &theta[f]);
-  constrain_acute_sectors(mesh, fr, field.feature_edge, field.constrained_face, theta);
-  for (int f = 0; f < nf; ++f)
-    if (field.constrained_face[f] != kFree) {
-      z_fixed[f] = std::polar(1.0, 4 * theta[f]);
-      ++num_constrained;
-    }
+  const int num_constrained = constrain_faces(mesh, fr, field, theta, z_fixed);
   progress.update(0.05);
   progress.check_cancel();
-  if (num_constrained < nf) {
-    const ProxyFrames proxy = proxy_frames(mesh, fr, field.feature_edge);
-    for (int f = 0; f < nf; ++f)
-      if (field.constrained_face[f])
-        z_fixed[f] = std::polar(1.0, 4 * transfer_angle(theta[f], fr.e1[f], fr.e2[f], fr.normal[f], proxy.normal[f],
-                                                        proxy.e1[f], proxy.e2[f]));
-    progress.check_cancel();
-    const ComplexSparse A = smoothness_matrix(mesh, fr, proxy);
-    const ComplexVector z = num_constrained > 0 ? solve_constrained(A, field.constrained_face, z_fixed, progress)
-                                                : smallest_eigenvector(A, fr.area, progress);
-    for (int f = 0; f < nf; ++f)
-      if (!field.constrained_face[f])
-        theta[f] = transfer_angle(std::arg(z[f]) / 4, proxy.e1[f], proxy.e2[f], proxy.normal[f], fr.normal[f],
-                                  fr.e1[f], fr.e2[f]);
-  }
+  if (num_constrained < nf) solve_free_faces(mesh, fr, field, num_constrained, z_fixed, theta, progress);
   progress.update(0.9);
   field.direction.resize(nf);
   for (int f = 0; f < nf; ++f) field.direction[f] = std::cos(theta[f]) * fr.e1[f] + std::sin(theta[f]) * fr.e2[f];
 
-  // Isoline sectors of feature/boundary halfedges, each from its own face (nearest axis);
-  // rho = chart angle - sector * 90deg, in [-45deg, 45deg].
-  field.edge_sector.assign(nh, -1);
-  std::vector<double> rho(nh, 0.0);
-  for (int h = 0; h < nh; ++h)
-    if (is_feature_halfedge(mesh, field.feature_edge, h))
-      field.edge_sector[h] =
-          static_cast<int8_t>(mod4(nearest_quarter(wrap_angle(fr.angle[h] - theta[h / 3]), &rho[h])));
+  std::vector<double> rho = assign_edge_sectors(mesh, fr, theta, field);
 
-  // Residual rotations across ordinary edges (they do not depend on the sectors), then the
-  // sectors that would collapse are repaired.
+  // Residual rotations across ordinary edges, then the sectors that would collapse are repaired.
   field.matching.assign(nh, 0);
-  std::vector<double> eps(nh, 0.0);
-  for (int e = 0; e < ne; ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0 || field.feature_edge[e]) continue;
-    nearest_quarter(wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]), &eps[h]);
-    eps[o] = -eps[h];
-  }
+  std::vector<double> eps = ordinary_edge_residuals(mesh, fr, theta, field.feature_edge);
   std::vector<int> shift;
   field.num_resolved_sectors = resolve_collapsed_sectors(mesh, field.feature_edge, eps, rho, field.edge_sector, shift);
 
-  // Matchings and the residual rotation eps[h] left after the quarter turns (the edge's chart
-  // angle on the far side minus its chart angle here minus matching * 90deg). Ordinary edges:
-  // nearest quarter turn, |eps| <= 45deg. Feature edges: the quarter turn that keeps both sides'
-  // own sectors, q(o) = q(h) + r + 2, so |eps| = |rho(o) - rho(h)| <= 90deg.
-  for (int e = 0; e < ne; ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0) continue;
-    const double mismatch = wrap_angle(theta[h / 3] - fr.angle[h] + fr.angle[o] + M_PI - theta[o / 3]);
-    int q;
-    if (field.feature_edge[e]) {
-      q = field.edge_sector[o] - field.edge_sector[h] - 2;
-      eps[h] = wrap_angle(mismatch - q * kQuarter);
-    } else {
-      q = nearest_quarter(mismatch, &eps[h]) + shift[h];
-      eps[h] = mismatch - q * kQuarter;
-    }
-    eps[o] = -eps[h];
-    field.matching[h] = static_cast<int8_t>(mod4(q));
-    field.matching[o] = static_cast<int8_t>(mod4(-q));
-  }
-
-  // Index = (angle defect - field rotation relative to parallel transport) / 90deg; on the
-  // boundary the defect is the turning pi - sum(angles), corrected by how far the two boundary
-  // edges are off their isolines. Every value is an integer up to rounding and they sum to 4 chi.
-  field.vertex_index.assign(nv, 0);
-  for (int v = 0; v < nv; ++v) {
-    const std::vector<int> fan = outgoing_halfedges(mesh, v);
-    const bool boundary = is_boundary_vertex(mesh, v);
-    double turning = boundary ? M_PI : 2 * M_PI;
-    for (size_t i = 0; i < fan.size(); ++i) {
-      turning -= corner_angle(mesh, fan[i]);
-      if (mesh.opposite[TriMesh::prev(fan[i])] >= 0) turning -= eps[TriMesh::prev(fan[i])];
-    }
-    if (boundary) turning += rho[TriMesh::prev(fan.back())] - rho[fan.front()];
-    field.vertex_index[v] = static_cast<int>(std::lround(turning / kQuarter));
-    field.num_collapsed_sectors += count_collapsed_sectors(mesh, field.feature_edge, fan, boundary, eps, rho);
-  }
-  for (int v = 0; v < nv; ++v) {
-    field.index_sum += field.vertex_index[v];
-    field.num_singularities += field.vertex_index[v] != 0;
-  }
-  field.euler_characteristic = nv - ne + nf;
-  if (field.index_sum != 4 * field.euler_characteristic)
-    throw Error(ErrorCode::StageFailed, "cross field: singularity indices sum to " + std::to_string(field.index_sum) +
-                                            " quarter turns instead of 4 * " +
-                                            std::to_string(field.euler_characteristic) + " (internal error)");
+  compute_matchings(mesh, fr, theta, shift, field, eps);
+  compute_vertex_indices(mesh, eps, rho, field);
   progress.update(1.0);
   return field;
 }

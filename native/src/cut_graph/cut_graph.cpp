@@ -50,17 +50,18 @@ void check_field(const TriMesh& mesh, const CrossField& field) {
     throw Error(ErrorCode::InvalidArgument, "cut graph: the cross field does not belong to this mesh");
 }
 
-}  // namespace
+// Multi-source shortest-path forest of the primal tree T: distance to, region of (terminal id) and
+// parent edge towards the nearest terminal of every vertex.
+struct PrimalForest {
+  std::vector<double> dist;
+  std::vector<int> region, parent_edge;
+};
 
-CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progress& progress) {
-  check_field(mesh, field);
-  const int nv = mesh.num_vertices(), ne = mesh.num_edges(), nf = mesh.num_faces(), nh = mesh.num_halfedges();
-  CutGraph cut;
-  cut.singular_vertex.assign(nv, 0);
-  for (int v = 0; v < nv; ++v) cut.singular_vertex[v] = field.vertex_index[v] != 0;
-
-  // Terminals: every boundary loop (all its vertices) and every interior singularity.
-  std::vector<int> terminal(nv, -1);
+// Terminals: every boundary loop (all its vertices) and every interior singularity. Fills
+// terminal[v] (terminal id or -1) and returns the number of terminals.
+int find_terminals(const TriMesh& mesh, const std::vector<char>& singular_vertex, std::vector<int>& terminal) {
+  const int nv = mesh.num_vertices(), nh = mesh.num_halfedges();
+  terminal.assign(nv, -1);
   int num_terminals = 0;
   {
     std::vector<char> seen(nh, 0);
@@ -74,13 +75,22 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     }
   }
   for (int v = 0; v < nv; ++v)
-    if (terminal[v] < 0 && cut.singular_vertex[v]) terminal[v] = num_terminals++;
+    if (terminal[v] < 0 && singular_vertex[v]) terminal[v] = num_terminals++;
   if (num_terminals == 0) terminal[0] = num_terminals++;  // e.g. a torus without singularities
+  return num_terminals;
+}
 
-  // Primal tree T: shortest-path forest grown from all terminals at once ...
-  const InteriorAdjacency adjacency(mesh);
-  std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
-  std::vector<int> region(nv, -1), parent_edge(nv, -1);
+// Primal tree T: shortest-path forest grown from all terminals at once (multi-source Dijkstra over
+// interior edges) ...
+PrimalForest grow_shortest_path_forest(const TriMesh& mesh, const InteriorAdjacency& adjacency,
+                                       const std::vector<int>& terminal, Progress& progress) {
+  const int nv = mesh.num_vertices();
+  PrimalForest forest;
+  std::vector<double>& dist = forest.dist;
+  std::vector<int>& region = forest.region;
+  std::vector<int>& parent_edge = forest.parent_edge;
+  dist.assign(nv, std::numeric_limits<double>::infinity());
+  region.assign(nv, -1), parent_edge.assign(nv, -1);
   using Entry = std::pair<double, int>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
   for (int v = 0; v < nv; ++v)
@@ -103,12 +113,21 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
       }
     }
   }
+  return forest;
+}
+
+// Edges of the primal tree T (#E flags): the forest's parent edges ... Throws if a vertex was not
+// reached.
+std::vector<char> primal_tree_edges(const TriMesh& mesh, const PrimalForest& forest, int num_terminals) {
+  const int nv = mesh.num_vertices(), ne = mesh.num_edges();
+  const std::vector<double>& dist = forest.dist;
+  const std::vector<int>& region = forest.region;
   std::vector<char> in_tree(ne, 0);
   for (int v = 0; v < nv; ++v) {
     if (region[v] < 0)
       throw Error(ErrorCode::StageFailed, "cut graph: vertex " + std::to_string(v) +
                                               " is not connected to the rest of the component by interior edges");
-    if (parent_edge[v] >= 0) in_tree[parent_edge[v]] = 1;
+    if (forest.parent_edge[v] >= 0) in_tree[forest.parent_edge[v]] = 1;
   }
   // ... whose regions are joined by a minimum spanning tree of the region-crossing edges.
   std::vector<std::pair<double, int>> candidates;
@@ -124,10 +143,14 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     const int h = mesh.edge_halfedge[e];
     if (regions.unite(region[mesh.from(h)], region[mesh.to(h)])) in_tree[e] = 1;
   }
-  progress.update(0.3);
+  return in_tree;
+}
 
-  // Dual tree T* over the other interior edges: maximum spanning tree by the length of the loop
-  // each edge would close, so that the left-over (handle loop) edges close short loops.
+// Dual tree T* over the other interior edges: maximum spanning tree by the length of the loop
+// each edge would close, so that the left-over (handle loop) edges close short loops. Returns the
+// #E flags of the edges T* crosses; throws if the faces are not connected.
+std::vector<char> dual_tree_edges(const TriMesh& mesh, const std::vector<double>& dist, const std::vector<char>& in_tree) {
+  const int ne = mesh.num_edges(), nf = mesh.num_faces();
   std::vector<std::pair<double, int>> dual_edges;
   for (int e = 0; e < ne; ++e) {
     const int h = mesh.edge_halfedge[e];
@@ -146,10 +169,14 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     throw Error(ErrorCode::StageFailed, "cut graph: the faces are not connected across interior edges "
                                         "(internal error: " + std::to_string(dual_tree_edges) + " dual tree edges for " +
                                             std::to_string(nf) + " faces)");
-  progress.update(0.5);
+  return in_dual_tree;
+}
 
-  // Cut candidates: interior edges off the dual tree. Prune dangling branches at regular
-  // interior vertices.
+// Cut candidates: interior edges off the dual tree. Prune dangling branches at regular
+// interior vertices. Fills cut.is_cut and cut.num_cut_edges (needs cut.singular_vertex).
+void choose_cut_edges(const TriMesh& mesh, const InteriorAdjacency& adjacency, const std::vector<char>& in_dual_tree,
+                      CutGraph& cut) {
+  const int nv = mesh.num_vertices(), ne = mesh.num_edges();
   cut.is_cut.assign(ne, 0);
   std::vector<int> degree(nv, 0);
   for (int e = 0; e < ne; ++e) {
@@ -177,9 +204,12 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
     }
   }
   for (int e = 0; e < ne; ++e) cut.num_cut_edges += cut.is_cut[e];
-  progress.update(0.7);
+}
 
-  // Comb: turn each face's frame so that the matching vanishes across every dual tree edge.
+// Comb: turn each face's frame so that the matching vanishes across every dual tree edge. Fills
+// cut.frame_turns, rotation, frame_u and edge_sector (needs cut.is_cut).
+void comb_field(const TriMesh& mesh, const CrossField& field, const std::vector<char>& in_dual_tree, CutGraph& cut) {
+  const int nf = mesh.num_faces(), nh = mesh.num_halfedges();
   cut.frame_turns.assign(nf, 0);
   std::vector<char> visited(nf, 0);
   std::vector<int> stack{0};
@@ -210,6 +240,31 @@ CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progres
   for (int h = 0; h < nh; ++h)
     if (field.edge_sector[h] >= 0)
       cut.edge_sector[h] = static_cast<int8_t>(mod4(field.edge_sector[h] - cut.frame_turns[h / 3]));
+}
+
+}  // namespace
+
+CutGraph compute_cut_graph(const TriMesh& mesh, const CrossField& field, Progress& progress) {
+  check_field(mesh, field);
+  const int nv = mesh.num_vertices();
+  CutGraph cut;
+  cut.singular_vertex.assign(nv, 0);
+  for (int v = 0; v < nv; ++v) cut.singular_vertex[v] = field.vertex_index[v] != 0;
+
+  std::vector<int> terminal;
+  const int num_terminals = find_terminals(mesh, cut.singular_vertex, terminal);
+  const InteriorAdjacency adjacency(mesh);
+  const PrimalForest forest = grow_shortest_path_forest(mesh, adjacency, terminal, progress);
+  const std::vector<char> in_tree = primal_tree_edges(mesh, forest, num_terminals);
+  progress.update(0.3);
+
+  const std::vector<char> in_dual_tree = dual_tree_edges(mesh, forest.dist, in_tree);
+  progress.update(0.5);
+
+  choose_cut_edges(mesh, adjacency, in_dual_tree, cut);
+  progress.update(0.7);
+
+  comb_field(mesh, field, in_dual_tree, cut);
   progress.update(1.0);
   return cut;
 }

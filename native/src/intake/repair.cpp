@@ -137,6 +137,165 @@ void triangulate_polygon(const PolygonSoup& soup, int f, const std::unordered_se
   out.insert(out.end(), tris.begin(), tris.end());
 }
 
+// Repair of degenerate (zero-area or flat) triangles by edge collapses and flips, pass by pass;
+// each pass indexes the adjacency afresh and locks the one-rings it changes.
+class ZeroAreaRepair {
+ public:
+  ZeroAreaRepair(TriangleSoup& soup, double zero_area, double flatness)
+      : soup_(soup), zero_area_(zero_area), flatness_(flatness) {
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const Vec3& p : soup.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    diag2_ = (hi - lo).squaredNorm();
+  }
+
+  // Number of degenerate triangles in the soup.
+  int count_degenerate() const {
+    int n = 0;
+    for (int t = 0; t < static_cast<int>(soup_.triangles.size()); ++t) n += is_degenerate(t);
+    return n;
+  }
+
+  // One repair pass over the degenerate triangles. Returns false when nothing was (or is left to
+  // be) changed.
+  bool run_pass() {
+    const int nt = static_cast<int>(soup_.triangles.size());
+    std::vector<int> degenerate;
+    for (int t = 0; t < nt; ++t)
+      if (is_degenerate(t)) degenerate.push_back(t);
+    if (degenerate.empty()) return false;
+    index_adjacency();
+    locked_.assign(soup_.positions.size(), 0);
+    removed_.assign(nt, 0);
+    replace_.resize(soup_.positions.size());
+    std::iota(replace_.begin(), replace_.end(), 0);
+    bool changed = false;
+    for (int t : degenerate)
+      if (repair_triangle(t)) changed = true;
+    if (!changed) return false;
+    std::vector<char> keep(nt);
+    for (int t = 0; t < nt; ++t) keep[t] = !removed_[t];
+    keep_triangles(soup_, keep);
+    return true;
+  }
+
+ private:
+  // Tiny area relative to the bounding box diagonal, or flat relative to the longest edge.
+  bool is_degenerate(int t) const {
+    const double area = triangle_area(soup_, t);
+    double longest2 = 0;
+    for (int k = 0; k < 3; ++k)
+      longest2 = std::max(longest2, (soup_.positions[soup_.triangles[t][(k + 1) % 3]] -
+                                     soup_.positions[soup_.triangles[t][k]]).squaredNorm());
+    return area <= zero_area_ * diag2_ || 2 * area <= flatness_ * longest2;
+  }
+
+  // Adjacency for this pass: triangles per edge and per vertex.
+  void index_adjacency() {
+    const int nt = static_cast<int>(soup_.triangles.size());
+    edge_tris_ = std::unordered_map<uint64_t, std::vector<int>>();
+    vertex_tris_.assign(soup_.positions.size(), {});
+    for (int t = 0; t < nt; ++t)
+      for (int k = 0; k < 3; ++k) {
+        edge_tris_[edge_key(soup_.triangles[t][k], soup_.triangles[t][(k + 1) % 3])].push_back(t);
+        vertex_tris_[soup_.triangles[t][k]].push_back(t);
+      }
+  }
+
+  bool is_boundary_edge(int a, int b) { return edge_tris_[edge_key(a, b)].size() == 1; }
+  // Sorted distinct vertices sharing a triangle of this pass's adjacency with v.
+  std::vector<int> neighbours(int v) const {
+    std::vector<int> n;
+    for (int t : vertex_tris_[v])
+      for (int w : soup_.triangles[t])
+        if (w != v) n.push_back(w);
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+    return n;
+  }
+  bool is_boundary_vertex(int v) {
+    for (int w : neighbours(v))
+      if (is_boundary_edge(v, w)) return true;
+    return false;
+  }
+  // Locks v and its neighbours for the rest of the pass.
+  void lock_ring(int v) {
+    locked_[v] = 1;
+    for (int w : neighbours(v)) locked_[w] = 1;
+  }
+
+  // Collapses or flips degenerate triangle t unless it is removed or locked: needles (a tiny
+  // edge or area) collapse first, caps flip first. Returns whether it changed the soup.
+  bool repair_triangle(int t) {
+    if (removed_[t]) return false;
+    const auto tri = soup_.triangles[t];
+    if (locked_[tri[0]] || locked_[tri[1]] || locked_[tri[2]]) return false;
+    double len[3];
+    for (int k = 0; k < 3; ++k)
+      len[k] = (soup_.positions[tri[(k + 1) % 3]] - soup_.positions[tri[k]]).norm();
+    const int shortest = static_cast<int>(std::min_element(len, len + 3) - len);
+    const int longest = static_cast<int>(std::max_element(len, len + 3) - len);
+    const bool needle = len[shortest] <= 1e-3 * len[longest] ||
+                        triangle_area(soup_, t) <= zero_area_ * diag2_;
+    return needle ? (try_collapse(tri, shortest) || try_flip(t, tri, longest))
+                  : (try_flip(t, tri, longest) || try_collapse(tri, shortest));
+  }
+
+  // Collapses the edge of tri starting at corner `shortest` if the link condition holds.
+  bool try_collapse(const std::array<int, 3>& tri, int shortest) {
+    int p = tri[shortest], q = tri[(shortest + 1) % 3];
+    const auto& faces = edge_tris_[edge_key(p, q)];
+    const bool edge_on_boundary = faces.size() == 1;
+    const bool pb = is_boundary_vertex(p), qb = is_boundary_vertex(q);
+    if (pb && qb && !edge_on_boundary) return false;
+    if (qb && !pb) std::swap(p, q);  // keep the boundary vertex where it is
+    // Link condition: common neighbours are exactly the apexes of the edge's faces.
+    std::vector<int> np = neighbours(p), nq = neighbours(q), common;
+    std::set_intersection(np.begin(), np.end(), nq.begin(), nq.end(), std::back_inserter(common));
+    if (common.size() != faces.size()) return false;
+    for (int f : faces) removed_[f] = 1;
+    for (int f : vertex_tris_[q])
+      for (int& w : soup_.triangles[f])
+        if (w == q) w = p;
+    replace_[q] = p;
+    lock_ring(p);
+    lock_ring(q);
+    return true;
+  }
+
+  // Flips the edge of triangle t (vertices tri) starting at corner `longest` if the result is
+  // a new edge between unlocked vertices.
+  bool try_flip(int t, const std::array<int, 3>& tri, int longest) {
+    const int a = tri[longest], b = tri[(longest + 1) % 3], c = tri[(longest + 2) % 3];
+    const auto& faces = edge_tris_[edge_key(a, b)];
+    if (faces.size() != 2) return false;
+    const int other = faces[0] == t ? faces[1] : faces[0];
+    if (removed_[other]) return false;
+    int d = -1;
+    for (int w : soup_.triangles[other])
+      if (w != a && w != b) d = w;
+    if (d < 0 || d == c || edge_tris_.count(edge_key(c, d))) return false;
+    for (int w : soup_.triangles[other])
+      if (locked_[w]) return false;
+    soup_.triangles[t] = {a, d, c};
+    soup_.triangles[other] = {d, b, c};
+    edge_tris_[edge_key(c, d)] = {t, other};
+    for (int w : {a, b, c, d}) lock_ring(w);
+    return true;
+  }
+
+  TriangleSoup& soup_;
+  double zero_area_, flatness_;
+  double diag2_ = 0;  // squared bounding box diagonal
+  // State of one pass.
+  std::unordered_map<uint64_t, std::vector<int>> edge_tris_;
+  std::vector<std::vector<int>> vertex_tris_;
+  std::vector<char> locked_, removed_;
+  std::vector<int> replace_;
+};
+
 }  // namespace
 
 void validate_soup(const PolygonSoup& soup) {
@@ -387,125 +546,15 @@ int split_nonmanifold_vertices(TriangleSoup& soup) {
 }
 
 int repair_zero_area_faces(TriangleSoup& soup, double zero_area, double flatness, int* remaining) {
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& p : soup.positions) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const double diag2 = (hi - lo).squaredNorm();
-  auto is_degenerate = [&](int t) {
-    const double area = triangle_area(soup, t);
-    double longest2 = 0;
-    for (int k = 0; k < 3; ++k)
-      longest2 = std::max(longest2, (soup.positions[soup.triangles[t][(k + 1) % 3]] -
-                                     soup.positions[soup.triangles[t][k]]).squaredNorm());
-    return area <= zero_area * diag2 || 2 * area <= flatness * longest2;
-  };
-  auto count_degenerate = [&] {
-    int n = 0;
-    for (int t = 0; t < static_cast<int>(soup.triangles.size()); ++t) n += is_degenerate(t);
-    return n;
-  };
-  const int found = count_degenerate();
+  ZeroAreaRepair repair(soup, zero_area, flatness);
+  const int found = repair.count_degenerate();
   if (found == 0) {
     if (remaining) *remaining = 0;
     return 0;
   }
-  for (int pass = 0; pass < 50; ++pass) {
-    const int nt = static_cast<int>(soup.triangles.size());
-    std::vector<int> degenerate;
-    for (int t = 0; t < nt; ++t)
-      if (is_degenerate(t)) degenerate.push_back(t);
-    if (degenerate.empty()) break;
-    // Adjacency for this pass.
-    std::unordered_map<uint64_t, std::vector<int>> edge_tris;
-    std::vector<std::vector<int>> vertex_tris(soup.positions.size());
-    for (int t = 0; t < nt; ++t)
-      for (int k = 0; k < 3; ++k) {
-        edge_tris[edge_key(soup.triangles[t][k], soup.triangles[t][(k + 1) % 3])].push_back(t);
-        vertex_tris[soup.triangles[t][k]].push_back(t);
-      }
-    auto is_boundary_edge = [&](int a, int b) { return edge_tris[edge_key(a, b)].size() == 1; };
-    auto neighbours = [&](int v) {
-      std::vector<int> n;
-      for (int t : vertex_tris[v])
-        for (int w : soup.triangles[t])
-          if (w != v) n.push_back(w);
-      std::sort(n.begin(), n.end());
-      n.erase(std::unique(n.begin(), n.end()), n.end());
-      return n;
-    };
-    auto is_boundary_vertex = [&](int v) {
-      for (int w : neighbours(v))
-        if (is_boundary_edge(v, w)) return true;
-      return false;
-    };
-    std::vector<char> locked(soup.positions.size(), 0), removed(nt, 0);
-    std::vector<int> replace(soup.positions.size());
-    std::iota(replace.begin(), replace.end(), 0);
-    bool changed = false;
-    auto lock_ring = [&](int v) {
-      locked[v] = 1;
-      for (int w : neighbours(v)) locked[w] = 1;
-    };
-    for (int t : degenerate) {
-      if (removed[t]) continue;
-      const auto tri = soup.triangles[t];
-      if (locked[tri[0]] || locked[tri[1]] || locked[tri[2]]) continue;
-      double len[3];
-      for (int k = 0; k < 3; ++k)
-        len[k] = (soup.positions[tri[(k + 1) % 3]] - soup.positions[tri[k]]).norm();
-      const int shortest = static_cast<int>(std::min_element(len, len + 3) - len);
-      const int longest = static_cast<int>(std::max_element(len, len + 3) - len);
-      const bool needle = len[shortest] <= 1e-3 * len[longest] ||
-                          triangle_area(soup, t) <= zero_area * diag2;
-
-      auto try_collapse = [&]() {
-        int p = tri[shortest], q = tri[(shortest + 1) % 3];
-        const auto& faces = edge_tris[edge_key(p, q)];
-        const bool edge_on_boundary = faces.size() == 1;
-        const bool pb = is_boundary_vertex(p), qb = is_boundary_vertex(q);
-        if (pb && qb && !edge_on_boundary) return false;
-        if (qb && !pb) std::swap(p, q);  // keep the boundary vertex where it is
-        // Link condition: common neighbours are exactly the apexes of the edge's faces.
-        std::vector<int> np = neighbours(p), nq = neighbours(q), common;
-        std::set_intersection(np.begin(), np.end(), nq.begin(), nq.end(), std::back_inserter(common));
-        if (common.size() != faces.size()) return false;
-        for (int f : faces) removed[f] = 1;
-        for (int f : vertex_tris[q])
-          for (int& w : soup.triangles[f])
-            if (w == q) w = p;
-        replace[q] = p;
-        lock_ring(p);
-        lock_ring(q);
-        return true;
-      };
-      auto try_flip = [&]() {
-        const int a = tri[longest], b = tri[(longest + 1) % 3], c = tri[(longest + 2) % 3];
-        const auto& faces = edge_tris[edge_key(a, b)];
-        if (faces.size() != 2) return false;
-        const int other = faces[0] == t ? faces[1] : faces[0];
-        if (removed[other]) return false;
-        int d = -1;
-        for (int w : soup.triangles[other])
-          if (w != a && w != b) d = w;
-        if (d < 0 || d == c || edge_tris.count(edge_key(c, d))) return false;
-        for (int w : soup.triangles[other])
-          if (locked[w]) return false;
-        soup.triangles[t] = {a, d, c};
-        soup.triangles[other] = {d, b, c};
-        edge_tris[edge_key(c, d)] = {t, other};
-        for (int w : {a, b, c, d}) lock_ring(w);
-        return true;
-      };
-      if (needle ? (try_collapse() || try_flip()) : (try_flip() || try_collapse())) changed = true;
-    }
-    if (!changed) break;
-    std::vector<char> keep(nt);
-    for (int t = 0; t < nt; ++t) keep[t] = !removed[t];
-    keep_triangles(soup, keep);
-  }
-  if (remaining) *remaining = count_degenerate();
+  for (int pass = 0; pass < 50; ++pass)
+    if (!repair.run_pass()) break;
+  if (remaining) *remaining = repair.count_degenerate();
   return found;
 }
 

@@ -135,132 +135,178 @@ class Assembler {
     return INT_MIN;
   }
 
-  void wall_pieces() {
+  // Wall edges with the nodes on them and around them, and which of their sub-intervals the
+  // wall walks have covered.
+  struct WallIndex {
+    std::map<int, std::vector<std::pair<Rational, int>>> on_edge;  // wall edge -> (lambda, node)
+    std::vector<int> vertex_node;                                  // mesh vertex -> node or -1
+    std::vector<std::vector<int>> wall_edges_at;                   // mesh vertex -> wall edges
+    std::vector<std::vector<char>> visited;  // wall edge -> sub-intervals between its nodes
+  };
+
+  // One walk along a wall: the piece under construction and the current atom (sub-interval k of
+  // wall edge e, run with increasing lambda or not).
+  struct WallWalk {
+    Piece p;
+    long double total[2] = {0, 0};  // displacement so far, in the first atom's chart
+    int rho = 0, prev_face = -1, prev_vertex = -1;
+    bool first_atom = true;
+    int e = -1, k = 0;
+    bool increasing = true;
+  };
+
+  // Indexes the wall edges: nodes on them sorted by lambda, nodes at vertices, wall edges at
+  // each vertex, and unvisited sub-intervals.
+  WallIndex index_walls() const {
     const auto& nodes = tracer_.nodes();
     const auto& walls = tracer_.wall_edge();
-    std::map<int, std::vector<std::pair<Rational, int>>> on_edge;  // wall edge -> (lambda, node)
-    std::vector<int> vertex_node(mesh_.num_vertices(), -1);
+    WallIndex w;
+    auto& on_edge = w.on_edge;
+    w.vertex_node.assign(mesh_.num_vertices(), -1);
     for (int n = 0; n < static_cast<int>(nodes.size()); ++n) {
       const PointKey& k = nodes[n].key;
-      if (k.type == PointKey::Vertex) vertex_node[k.id] = n;
+      if (k.type == PointKey::Vertex) w.vertex_node[k.id] = n;
       if (k.type == PointKey::Edge && walls[k.id]) on_edge[k.id].push_back({k.a, n});
     }
-    std::vector<std::vector<int>> wall_edges_at(mesh_.num_vertices());
-    std::vector<std::vector<char>> visited(mesh_.num_edges());
+    w.wall_edges_at.resize(mesh_.num_vertices());
+    w.visited.resize(mesh_.num_edges());
     for (int e = 0; e < mesh_.num_edges(); ++e) {
       if (!walls[e]) continue;
       auto& list = on_edge[e];
       std::sort(list.begin(), list.end(), [](const auto& x, const auto& y) { return compare(x.first, y.first) < 0; });
-      visited[e].assign(list.size() + 1, 0);
+      w.visited[e].assign(list.size() + 1, 0);
       const int h = mesh_.edge_halfedge[e];
-      wall_edges_at[mesh_.from(h)].push_back(e);
-      wall_edges_at[mesh_.to(h)].push_back(e);
+      w.wall_edges_at[mesh_.from(h)].push_back(e);
+      w.wall_edges_at[mesh_.to(h)].push_back(e);
     }
-    // Walk from node `start` along wall edge e, starting with sub-interval k, increasing lambda
-    // or not, through straight wall vertices, to the next node.
-    auto walk = [&](int start, int e, int k, bool increasing) {
-      if (visited[e][k]) return;
-      Piece p;
-      p.wall = true;
-      p.a = start;
-      long double total[2] = {0, 0};
-      int rho = 0, prev_face = -1, prev_vertex = -1;
-      bool first_atom = true;
-      for (int guard = 0;; ++guard) {
-        if (guard > 4 * mesh_.num_edges() + 8) fail("internal: wall walk does not end");
-        visited[e][k] = 1;
-        const auto& list = on_edge[e];
-        const int hc = mesh_.edge_halfedge[e];
-        const int face = hc / 3;
-        if (prev_vertex >= 0) {  // change of chart around the shared vertex
-          const VertexStar& s = tracer_.stars()[prev_vertex];
-          const int c1 = s.corner_of_face(prev_face), c2 = s.corner_of_face(face);
-          if (c1 < 0 || c2 < 0) fail("internal: wall chain leaves the vertex ring");
-          rho += s.ring[c2].acc - s.ring[c1].acc;
-        }
-        const Rational lam0 = k == 0 ? Rational(0) : list[k - 1].first;
-        const Rational lam1 = k == static_cast<int>(list.size()) ? Rational(1) : list[k].first;
-        const Rational& ls = increasing ? lam0 : lam1;
-        const Rational& le = increasing ? lam1 : lam0;
-        p.points.push_back(edge_point(e, ls));
-        p.points.push_back(edge_point(e, le));
-        const P2& P = tracer_.uv2()[hc];
-        const P2& Q = tracer_.uv2()[TriMesh::next(hc)];
-        const P2 ev = increasing ? sub(Q, P) : sub(P, Q);
-        const int dir = nearest_cardinal(ev);
-        if (first_atom) {
-          p.first_dir = dir;
-          if (mesh_.opposite[hc] < 0) {
-            p.left_ok[0] = increasing;
-            p.left_ok[1] = !increasing;
-          }
-          const int ds = nodes[start].key.type == PointKey::Vertex ? wall_number_at_vertex(nodes[start].key.id, e)
-                                                                     : tracer_.node_direction(start, face, dir);
-          p.dir_a = ds;
-        }
-        first_atom = false;
-        p.last_dir = dir;
-        // Displacement of this atom, rotated back into the first atom's chart.
-        const long double span = rational_difference(le, ls);
-        const std::array<long double, 2> disp{span * static_cast<long double>(Q[0] - P[0]),
-                                              span * static_cast<long double>(Q[1] - P[1])};
-        const std::array<long double, 2> back = rotate_quarter(disp, -rho);
-        total[0] += back[0];
-        total[1] += back[1];
-        // Where does this atom end?
-        const bool at_interior_node = increasing ? k < static_cast<int>(list.size()) : k > 0;
-        int end_node = -1;
-        if (at_interior_node) {
-          end_node = list[increasing ? k : k - 1].second;
-        } else {
-          const int x = increasing ? mesh_.to(hc) : mesh_.from(hc);
-          if (vertex_node[x] >= 0) {
-            end_node = vertex_node[x];
-          } else {
-            int e2 = -1;
-            for (int cand : wall_edges_at[x])
-              if (cand != e) e2 = cand;
-            if (wall_edges_at[x].size() != 2 || e2 < 0) fail("internal: wall vertex " + std::to_string(x) + " is no node but not straight");
-            prev_vertex = x;
-            prev_face = face;
-            e = e2;
-            const bool from_x = mesh_.from(mesh_.edge_halfedge[e]) == x;
-            increasing = from_x;
-            k = from_x ? 0 : static_cast<int>(on_edge[e].size());
-            if (visited[e][k]) fail("internal: wall atom visited twice");
-            continue;
-          }
-        }
-        p.b = end_node;
-        const int de = nodes[end_node].key.type == PointKey::Vertex
-                           ? wall_number_at_vertex(nodes[end_node].key.id, e)
-                           : tracer_.node_direction(end_node, face, dir + 2);
-        p.dir_b = de;
-        break;
-      }
-      if (p.dir_a == INT_MIN || p.dir_b == INT_MIN) fail("internal: wall direction unknown at its node");
-      const int axis = p.first_dir & 1;
-      p.length = static_cast<double>(std::fabs(total[axis]) * scale_);
-      pieces_.push_back(std::move(p));
-    };
+    return w;
+  }
+
+  void wall_pieces() {
+    const auto& nodes = tracer_.nodes();
+    const auto& walls = tracer_.wall_edge();
+    WallIndex w = index_walls();
     for (int n = 0; n < static_cast<int>(nodes.size()); ++n) {
       const PointKey& key = nodes[n].key;
       if (key.type == PointKey::Vertex) {
-        for (int e : wall_edges_at[key.id]) {
+        for (int e : w.wall_edges_at[key.id]) {
           const bool from_v = mesh_.from(mesh_.edge_halfedge[e]) == key.id;
-          walk(n, e, from_v ? 0 : static_cast<int>(on_edge[e].size()), from_v);
+          walk_wall(w, n, e, from_v ? 0 : static_cast<int>(w.on_edge[e].size()), from_v);
         }
       } else if (key.type == PointKey::Edge && walls[key.id]) {
-        const auto& list = on_edge[key.id];
+        const auto& list = w.on_edge[key.id];
         int i = 0;
         while (list[i].second != n) ++i;
-        walk(n, key.id, i + 1, true);
-        walk(n, key.id, i, false);
+        walk_wall(w, n, key.id, i + 1, true);
+        walk_wall(w, n, key.id, i, false);
       }
     }
     for (int e = 0; e < mesh_.num_edges(); ++e)
-      for (char v : visited[e])
+      for (char v : w.visited[e])
         if (!v) fail("internal: part of a feature/boundary curve has no node");
+  }
+
+  // Walk from node `start` along wall edge e, starting with sub-interval k, increasing lambda
+  // or not, through straight wall vertices, to the next node; appends the wall piece.
+  void walk_wall(WallIndex& w, int start, int e, int k, bool increasing) {
+    if (w.visited[e][k]) return;
+    const auto& nodes = tracer_.nodes();
+    WallWalk walk;
+    Piece& p = walk.p;
+    p.wall = true;
+    p.a = start;
+    walk.e = e, walk.k = k, walk.increasing = increasing;
+    for (int guard = 0;; ++guard) {
+      if (guard > 4 * mesh_.num_edges() + 8) fail("internal: wall walk does not end");
+      const int face = mesh_.edge_halfedge[walk.e] / 3;
+      const int dir = add_wall_atom(w, walk, start);
+      const int end_node = wall_atom_end(w, walk);
+      if (end_node < 0) continue;
+      p.b = end_node;
+      const int de = nodes[end_node].key.type == PointKey::Vertex
+                         ? wall_number_at_vertex(nodes[end_node].key.id, walk.e)
+                         : tracer_.node_direction(end_node, face, dir + 2);
+      p.dir_b = de;
+      break;
+    }
+    if (p.dir_a == INT_MIN || p.dir_b == INT_MIN) fail("internal: wall direction unknown at its node");
+    const int axis = p.first_dir & 1;
+    p.length = static_cast<double>(std::fabs(walk.total[axis]) * scale_);
+    pieces_.push_back(std::move(p));
+  }
+
+  // Adds the walk's current atom to its piece (points, directions, displacement) and marks it
+  // visited. Returns the atom's direction (nearest cardinal, in its face's chart).
+  int add_wall_atom(WallIndex& w, WallWalk& walk, int start) const {
+    const auto& nodes = tracer_.nodes();
+    const int e = walk.e, k = walk.k;
+    const bool increasing = walk.increasing;
+    Piece& p = walk.p;
+    w.visited[e][k] = 1;
+    const auto& list = w.on_edge[e];
+    const int hc = mesh_.edge_halfedge[e];
+    const int face = hc / 3;
+    if (walk.prev_vertex >= 0) {  // change of chart around the shared vertex
+      const VertexStar& s = tracer_.stars()[walk.prev_vertex];
+      const int c1 = s.corner_of_face(walk.prev_face), c2 = s.corner_of_face(face);
+      if (c1 < 0 || c2 < 0) fail("internal: wall chain leaves the vertex ring");
+      walk.rho += s.ring[c2].acc - s.ring[c1].acc;
+    }
+    const Rational lam0 = k == 0 ? Rational(0) : list[k - 1].first;
+    const Rational lam1 = k == static_cast<int>(list.size()) ? Rational(1) : list[k].first;
+    const Rational& ls = increasing ? lam0 : lam1;
+    const Rational& le = increasing ? lam1 : lam0;
+    p.points.push_back(edge_point(e, ls));
+    p.points.push_back(edge_point(e, le));
+    const P2& P = tracer_.uv2()[hc];
+    const P2& Q = tracer_.uv2()[TriMesh::next(hc)];
+    const P2 ev = increasing ? sub(Q, P) : sub(P, Q);
+    const int dir = nearest_cardinal(ev);
+    if (walk.first_atom) {
+      p.first_dir = dir;
+      if (mesh_.opposite[hc] < 0) {
+        p.left_ok[0] = increasing;
+        p.left_ok[1] = !increasing;
+      }
+      const int ds = nodes[start].key.type == PointKey::Vertex ? wall_number_at_vertex(nodes[start].key.id, e)
+                                                                 : tracer_.node_direction(start, face, dir);
+      p.dir_a = ds;
+    }
+    walk.first_atom = false;
+    p.last_dir = dir;
+    // Displacement of this atom, rotated back into the first atom's chart.
+    const long double span = rational_difference(le, ls);
+    const std::array<long double, 2> disp{span * static_cast<long double>(Q[0] - P[0]),
+                                          span * static_cast<long double>(Q[1] - P[1])};
+    const std::array<long double, 2> back = rotate_quarter(disp, -walk.rho);
+    walk.total[0] += back[0];
+    walk.total[1] += back[1];
+    return dir;
+  }
+
+  // Where does the walk's current atom end? Returns the node there, or -1 after moving the walk
+  // on through a straight wall vertex (no node) onto the next wall edge.
+  int wall_atom_end(WallIndex& w, WallWalk& walk) const {
+    const int e = walk.e, k = walk.k;
+    const bool increasing = walk.increasing;
+    const auto& list = w.on_edge[e];
+    const int hc = mesh_.edge_halfedge[e];
+    const bool at_interior_node = increasing ? k < static_cast<int>(list.size()) : k > 0;
+    if (at_interior_node) return list[increasing ? k : k - 1].second;
+    const int x = increasing ? mesh_.to(hc) : mesh_.from(hc);
+    if (w.vertex_node[x] >= 0) return w.vertex_node[x];
+    int e2 = -1;
+    for (int cand : w.wall_edges_at[x])
+      if (cand != e) e2 = cand;
+    if (w.wall_edges_at[x].size() != 2 || e2 < 0) fail("internal: wall vertex " + std::to_string(x) + " is no node but not straight");
+    walk.prev_vertex = x;
+    walk.prev_face = hc / 3;
+    walk.e = e2;
+    const bool from_x = mesh_.from(mesh_.edge_halfedge[e2]) == x;
+    walk.increasing = from_x;
+    walk.k = from_x ? 0 : static_cast<int>(w.on_edge[e2].size());
+    if (w.visited[walk.e][walk.k]) fail("internal: wall atom visited twice");
+    return -1;
   }
 
   int node_period(int n) const {
