@@ -15,7 +15,7 @@
 #include "quantization/generating_vectors.h"
 #include "quantization/quantization.h"
 #include "quantization/round_quantization.h"
-#include "quantization/synthetic_tmesh.h"
+#include "synthetic_tmesh.h"
 #include "quantization/validity.h"
 #include "test_support.h"
 

@@ -27,7 +27,7 @@ typedef enum qgp_status {
   QGP_ERR_INVALID_ARGUMENT = 1, /* malformed call: null pointer, bad option, wrong size */
   QGP_ERR_INVALID_MESH = 2,     /* the mesh is unusable (NaN, bad index, non-manifold, ...) */
   QGP_ERR_UNREADABLE_FILE = 3,  /* the file cannot be opened or parsed */
-  QGP_ERR_NOT_BUILT = 4,        /* a requested pipeline stage does not exist yet */
+  /* 4 is not used (it was "stage not built yet"); the numbers of the others stay. */
   QGP_ERR_STAGE_FAILED = 5,     /* a stage ran but produced no valid result */
   QGP_ERR_CANCELLED = 6,        /* the job was cancelled */
   QGP_ERR_BUSY = 7,             /* a job is running on this session */

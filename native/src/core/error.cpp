@@ -7,7 +7,6 @@ const char* error_code_name(ErrorCode code) {
     case ErrorCode::InvalidArgument: return "invalid_argument";
     case ErrorCode::InvalidMesh: return "invalid_mesh";
     case ErrorCode::UnreadableFile: return "unreadable_file";
-    case ErrorCode::NotBuilt: return "not_built";
     case ErrorCode::StageFailed: return "stage_failed";
     case ErrorCode::Cancelled: return "cancelled";
     case ErrorCode::Busy: return "busy";

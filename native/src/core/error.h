@@ -9,7 +9,6 @@ enum class ErrorCode {
   InvalidArgument = 1,  // a caller passed something malformed (option value, array size, ...)
   InvalidMesh = 2,      // the mesh is unusable (NaN, bad index, non-manifold edge, ...)
   UnreadableFile = 3,   // the file cannot be opened or parsed
-  NotBuilt = 4,         // a pipeline stage that does not exist yet was requested
   StageFailed = 5,      // a stage ran but could not produce a valid result
   Cancelled = 6,        // the caller cancelled the job
   Busy = 7,             // a job is already running on this session

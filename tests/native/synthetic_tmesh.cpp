@@ -1,4 +1,4 @@
-#include "quantization/synthetic_tmesh.h"
+#include "synthetic_tmesh.h"
 
 #include <algorithm>
 #include <map>
