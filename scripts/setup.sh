@@ -6,6 +6,7 @@ PACKAGES=(
   cmake g++ make pkg-config            # build
   clang libclang-rt-14-dev             # fuzzing (libFuzzer) and sanitizers
   libeigen3-dev libopenmesh-dev coinor-libipopt-dev libsuitesparse-dev libgmp-dev nlohmann-json3-dev
+  libcli11-dev                         # the CLI's argument parser
   libgtest-dev                         # tests
   blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
   libopenblas0-serial                  # optimized BLAS for MUMPS (Ipopt) factorizations: about 2x faster

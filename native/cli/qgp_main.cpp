@@ -1,9 +1,9 @@
 // qgp: command-line front end of the native pipeline, for batch use and tests.
 //
-// Exit codes: 0 success, 1 bad command line, 2 unusable input (with a one-line reason on
-// stderr), 3 a pipeline stage failed or is not built yet, 4 internal error (also when the process
-// is ended from inside a library, e.g. MUMPS calling exit, or by a fatal signal: see
-// report_abnormal_ends).
+// Exit codes: 0 success, 1 bad command line (or an output that cannot be written), 2 unusable
+// input (with a one-line reason on stderr), 3 a pipeline stage failed or was cancelled, 4 internal
+// error (also when the process is ended from inside a library, e.g. MUMPS calling exit, or by a
+// fatal signal: see report_abnormal_ends).
 #include <signal.h>
 #include <unistd.h>
 
@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 #include "core/error.h"
 #include "core/json.h"
 #include "intake/read_mesh_file.h"
@@ -26,14 +28,6 @@
 #include "tmesh/tmesh_system.h"
 
 namespace {
-
-const char* kUsage =
-    "usage:\n"
-    "  qgp info IN [--report R.json] [--drop-bad-components]\n"
-    "  qgp remesh IN -o OUT.obj [--faces N | --edge-length L] [--sharp-angle DEG]\n"
-    "             [--features FILE] [--uv-out UV.obj] [--layout-out LAYOUT.obj]\n"
-    "             [--report R.json] [--quantizer greedy|round] [--drop-bad-components]\n"
-    "IN: .obj, .ply or .off. --features FILE: one vertex-index pair per line (0-based).\n";
 
 // --- Abnormal ends: a library under the pipeline (MUMPS: "** MPI_ABORT called", then a Fortran
 // STOP, i.e. exit(0)) or a fatal signal must never look like success to a batch script.
@@ -78,57 +72,59 @@ void report_abnormal_ends() {
   for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE}) sigaction(sig, &action, nullptr);
 }
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 struct CommandLine {
   std::string command, input, output, report, features, uv_out, layout_out;
+  std::string quantizer = "greedy";
   qgp::RemeshOptions options;
 };
 
-double parse_number(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') throw UsageError(flag + " expects a number, got '" + text + "'");
-  return v;
+// The `info` and `remesh` commands and their options (CLI11); --help on each describes them.
+void add_commands(CLI::App& app, CommandLine& cl) {
+  app.require_subcommand(1);
+  CLI::App* info = app.add_subcommand("info", "Read, validate and repair a mesh; print what was found");
+  CLI::App* remesh = app.add_subcommand("remesh", "Turn a triangle mesh into a pure-quad mesh");
+  for (CLI::App* command : {info, remesh}) {
+    command->add_option("IN", cl.input, "input mesh: .obj, .ply or .off")->required();
+    command->add_option("--report", cl.report, "write the JSON report here (also when the run fails)");
+    command->add_flag("--drop-bad-components", cl.options.drop_bad_components,
+                      "drop non-manifold or non-orientable parts instead of refusing the mesh");
+  }
+  remesh->add_option("-o,--output", cl.output, "the quad mesh to write (.obj)")->required();
+  CLI::Option* faces = remesh->add_option("--faces", cl.options.target_faces, "target quad count (default 2000)")
+                           ->check(CLI::NonNegativeNumber);
+  remesh->add_option("--edge-length", cl.options.edge_length, "target quad edge length, in model units")
+      ->check(CLI::NonNegativeNumber)
+      ->excludes(faces);
+  remesh->add_option("--sharp-angle", cl.options.sharp_angle_deg,
+                     "keep edges whose faces meet at more than DEG degrees as feature curves")
+      ->check(CLI::Range(0.0, 180.0));
+  remesh->add_option("--features", cl.features, "feature edges: a file with one 0-based vertex-index pair per line");
+  remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
+  remesh->add_option("--layout-out", cl.layout_out, "write the T-mesh (motorcycle graph) as .obj polylines");
+  remesh->add_option("--quantizer", cl.quantizer, "greedy (the paper's, default) or round (the direct-rounding baseline)")
+      ->check(CLI::IsMember({"greedy", "round"}));
 }
 
-CommandLine parse(int argc, char** argv) {
-  if (argc < 3) throw UsageError("missing command or input file");
-  CommandLine cl;
-  cl.command = argv[1];
-  if (cl.command != "info" && cl.command != "remesh") throw UsageError("unknown command '" + cl.command + "'");
-  for (int i = 2; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw UsageError(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--report") cl.report = value();
-    else if (arg == "--drop-bad-components") cl.options.drop_bad_components = true;
-    else if (cl.command == "remesh" && (arg == "-o" || arg == "--output")) cl.output = value();
-    else if (cl.command == "remesh" && arg == "--faces") cl.options.target_faces = parse_number(arg, value());
-    else if (cl.command == "remesh" && arg == "--edge-length") cl.options.edge_length = parse_number(arg, value());
-    else if (cl.command == "remesh" && arg == "--sharp-angle") cl.options.sharp_angle_deg = parse_number(arg, value());
-    else if (cl.command == "remesh" && arg == "--features") cl.features = value();
-    else if (cl.command == "remesh" && arg == "--uv-out") cl.uv_out = value();
-    else if (cl.command == "remesh" && arg == "--layout-out") cl.layout_out = value();
-    else if (cl.command == "remesh" && arg == "--quantizer") {
-      const std::string q = value();
-      if (q != "greedy" && q != "round") throw UsageError("--quantizer must be greedy or round");
-      cl.options.quantizer = qgp::parse_quantizer(q);
-    } else if (!arg.empty() && arg[0] == '-') throw UsageError("unknown option '" + arg + "'");
-    else if (cl.input.empty()) cl.input = arg;
-    else throw UsageError("unexpected argument '" + arg + "'");
+// Parses the command line. On --help, or on a malformed command line (exit code 1, with the reason
+// and the usage on stderr), returns false and sets *exit_code.
+bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
+  CLI::App app("qgp: quad meshes and integer-grid maps from triangle meshes (Quantized Global Parametrization)",
+               "qgp");
+  add_commands(app, *cl);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) {
+      *exit_code = app.exit(e);  // --help
+      return false;
+    }
+    std::cerr << "qgp: " << e.what() << "\n" << app.help();
+    *exit_code = 1;
+    return false;
   }
-  if (cl.input.empty()) throw UsageError("missing input file");
-  if (cl.command == "remesh" && cl.output.empty()) throw UsageError("remesh needs -o OUT.obj");
-  if (cl.options.target_faces > 0 && cl.options.edge_length > 0)
-    throw UsageError("give --faces or --edge-length, not both");
-  if (cl.options.target_faces < 0 || cl.options.edge_length < 0)
-    throw UsageError("--faces and --edge-length must be positive");
-  return cl;
+  cl->command = app.got_subcommand("info") ? "info" : "remesh";
+  cl->options.quantizer = qgp::parse_quantizer(cl->quantizer);
+  return true;
 }
 
 std::vector<std::array<int, 2>> read_feature_pairs(const std::string& path) {
@@ -180,7 +176,6 @@ int exit_code_for(qgp::ErrorCode code) {
     case qgp::ErrorCode::InvalidMesh:
     case qgp::ErrorCode::UnreadableFile: return 2;
     case qgp::ErrorCode::InvalidArgument: return 1;
-    case qgp::ErrorCode::NotBuilt:
     case qgp::ErrorCode::StageFailed:
     case qgp::ErrorCode::Cancelled: return 3;
     default: return 4;
@@ -219,14 +214,15 @@ void write_layout_output(const std::string& path, const qgp::Session& session) {
 }
 
 // Writes whatever the session has for the optional outputs; false if a requested one could not be
-// written (with a message).
-bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session) {
+// written (with a message). After a failed run (run_failed) an output the run did not get to is
+// named but is not a write failure: the run's own error decides the exit code.
+bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session, bool run_failed) {
   bool ok = true;
   auto attempt = [&](const std::string& path, const char* what, bool available, auto write) {
     if (path.empty()) return;
     if (!available) {
       std::cerr << "qgp: no " << what << " was computed; '" << path << "' not written\n";
-      ok = false;
+      ok = ok && run_failed;
       return;
     }
     try {
@@ -279,10 +275,10 @@ int run(const CommandLine& cl) {
     report["file"] = cl.input;
     if (cl.command == "info") print_intake_summary(report);
     // Earlier stages' results (seamless map, T-mesh) are still written for inspection.
-    const bool written = write_optional_outputs(cl, session.get());
+    write_optional_outputs(cl, session.get(), true);
     write_report(cl.report, report);
     std::cerr << "qgp: " << e.what() << "\n";
-    return written ? exit_code_for(e.code()) : 1;
+    return exit_code_for(e.code());
   }
   report["file"] = cl.input;
   bool written = true;
@@ -299,7 +295,7 @@ int run(const CommandLine& cl) {
     }
     print_remesh_summary(report);
   }
-  written = write_optional_outputs(cl, session.get()) && written;
+  written = write_optional_outputs(cl, session.get(), false) && written;
   write_report(cl.report, report);
   return written ? 0 : 1;
 }
@@ -309,12 +305,8 @@ int run(const CommandLine& cl) {
 int main(int argc, char** argv) {
   report_abnormal_ends();
   CommandLine cl;
-  try {
-    cl = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "qgp: " << e.what() << "\n" << kUsage;
-    return 1;
-  }
+  int exit_code = 0;
+  if (!parse(argc, argv, &cl, &exit_code)) return exit_code;
   try {
     return run(cl);
   } catch (const std::exception& e) {
