@@ -72,159 +72,196 @@ void GeneratingVectorSearch::next_stamp() {
 bool GeneratingVectorSearch::find(int edge, const std::vector<double>& weight, std::vector<int>& dnodes,
                                   std::vector<int>* explored) {
   dnodes.clear();
-  const CellSystem& sys = system_;
-  const int s = 2 * edge, D = num_dnodes_;
   if (!(weight[edge] < kInf)) return false;
   next_stamp();
-  const uint32_t st = stamp_;
-  NodeState* state = state_.data();
-  auto touch = [&](int n) {
-    ++labelled_;
-    if (explored && n < D && edge_seen_[n / 2] != st) {
-      edge_seen_[n / 2] = st;
-      explored->push_back(n / 2);
-    }
-  };
+  begin_search(edge, weight, explored);
+  start_fronts();
+  grow_fronts();
+  return trace_result(dnodes);
+}
+
+void GeneratingVectorSearch::begin_search(int edge, const std::vector<double>& weight, std::vector<int>* explored) {
+  s_ = 2 * edge;
+  weight_ = weight.data();
+  explored_ = explored;
   fheap_.clear();
   bheap_.clear();
+  best_cycle_ = kInf;
+  cycle_a_ = cycle_b_ = -1;
+  sink_cost_ = source_cost_ = kInf;
+  sink_ = source_ = -1;
+  const uint32_t st = stamp_;
+  state_[s_] = NodeState{0, 0, -1, -1, st, st, st, st};
+  touch(s_);
+}
 
-  double best_cycle = kInf;
-  int cycle_a = -1, cycle_b = -1;  // the closing arc a -> b (a forward-, b backward-labelled)
-  double sink_cost = kInf, source_cost = kInf;
-  int sink = -1, source = -1;
+void GeneratingVectorSearch::touch(int n) {
+  ++labelled_;
+  if (explored_ && n < num_dnodes_ && edge_seen_[n / 2] != stamp_) {
+    edge_seen_[n / 2] = stamp_;
+    explored_->push_back(n / 2);
+  }
+}
 
-  state[s] = NodeState{0, 0, -1, -1, st, st, st, st};
-  touch(s);
+void GeneratingVectorSearch::offer_circuit(double cost, int a, int b) {
+  if (cost < best_cycle_) best_cycle_ = cost, cycle_a_ = a, cycle_b_ = b;
+}
 
-  // Forward search: the heap holds D-nodes. Settling a D-node settles its hub at once (the arc
-  // costs 0, so the hub is at the current minimum distance) and labels the D-nodes leaving it.
-  auto forward_label = [&](int h, int b) {  // arc hub h -> D-node b, h settled
-    const double wb = weight[b / 2];
-    if (!(wb < kInf)) return;
-    NodeState& nb = state[b];
-    const double nd = state[h].fdist + wb;
-    if (nb.blabel == st && nd + nb.bdist < best_cycle) best_cycle = nd + nb.bdist, cycle_a = h, cycle_b = b;
-    if (b == s || nb.fsettled == st) return;
-    if (nb.flabel == st) {
-      if (nb.fdist <= nd) return;
-    } else if (nb.blabel != st) {
-      touch(b);
-    }
-    nb.fdist = nd, nb.flabel = st, nb.fparent = h;
-    fheap_.push_back({nd, b});
-    std::push_heap(fheap_.begin(), fheap_.end());
-    if (next_hub_[b] < 0 && nd < sink_cost) sink_cost = nd, sink = b;
-  };
-  auto forward_settle = [&](int a) {  // D-node a settled
-    const int h = next_hub_[a];
-    if (h < 0) return;
-    NodeState& nh = state[h];
-    const double d = state[a].fdist;
-    if (nh.blabel == st && d + nh.bdist < best_cycle) best_cycle = d + nh.bdist, cycle_a = a, cycle_b = h;
-    if (nh.fsettled == st) return;
-    if (nh.flabel != st && nh.blabel != st) touch(h);
-    nh.fdist = d, nh.flabel = nh.fsettled = st, nh.fparent = a;
-    const int id = h - D, c = id / 4, side = (id % 4 + 2) % 4;
-    for (int o = sys.side_begin(c, side); o < sys.side_end(c, side); ++o) forward_label(h, exit_dnode_[o]);
-  };
-  // Backward search: the heap holds hubs. Settling a hub settles the D-nodes entering it at once
-  // (arcs into hubs cost 0) and labels the hubs they come from.
-  auto backward_settle_dnode = [&](int a, int h) {  // arc D-node a -> hub h, h settled backward
-    const double wa = weight[a / 2];
-    if (!(wa < kInf)) return;
-    NodeState& na = state[a];
-    const double d = state[h].bdist;
-    if (na.flabel == st && na.fdist + d < best_cycle) best_cycle = na.fdist + d, cycle_a = a, cycle_b = h;
-    if (a == s || na.bsettled == st) return;
-    if (na.flabel != st && na.blabel != st) touch(a);
-    na.bdist = d, na.blabel = na.bsettled = st, na.bparent = h;
-    const int p = prev_hub_[a];
-    if (p < 0) {
-      if (d + wa < source_cost) source_cost = d + wa, source = a;
-      return;
-    }
-    NodeState& np = state[p];
-    const double nd = d + wa;  // arc p -> a costs the weight of a
-    if (np.flabel == st && np.fdist + nd < best_cycle) best_cycle = np.fdist + nd, cycle_a = p, cycle_b = a;
-    if (np.bsettled == st) return;
-    if (np.blabel == st) {
-      if (np.bdist <= nd) return;
-    } else if (np.flabel != st) {
-      touch(p);
-    }
-    np.bdist = nd, np.blabel = st, np.bparent = a;
-    bheap_.push_back({nd, p});
-    std::push_heap(bheap_.begin(), bheap_.end());
-  };
-  auto backward_settle_hub = [&](int h) {
-    const int id = h - D, c = id / 4, side = id % 4;
-    for (int o = sys.side_begin(c, side); o < sys.side_end(c, side); ++o) backward_settle_dnode(enter_dnode_[o], h);
-  };
+// Forward search: the heap holds D-nodes. Settling a D-node settles its hub at once (the arc
+// costs 0, so the hub is at the current minimum distance) and labels the D-nodes leaving it.
+void GeneratingVectorSearch::forward_label(int h, int b) {  // arc hub h -> D-node b, h settled
+  const uint32_t st = stamp_;
+  const double wb = weight_[b / 2];
+  if (!(wb < kInf)) return;
+  NodeState& nb = state_[b];
+  const double nd = state_[h].fdist + wb;
+  if (nb.blabel == st) offer_circuit(nd + nb.bdist, h, b);
+  if (b == s_ || nb.fsettled == st) return;
+  if (nb.flabel == st) {
+    if (nb.fdist <= nd) return;
+  } else if (nb.blabel != st) {
+    touch(b);
+  }
+  nb.fdist = nd, nb.flabel = st, nb.fparent = h;
+  fheap_.push_back({nd, b});
+  std::push_heap(fheap_.begin(), fheap_.end());
+  if (next_hub_[b] < 0 && nd < sink_cost_) sink_cost_ = nd, sink_ = b;
+}
 
+void GeneratingVectorSearch::forward_settle(int a) {  // D-node a settled
+  const uint32_t st = stamp_;
+  const int h = next_hub_[a];
+  if (h < 0) return;
+  NodeState& nh = state_[h];
+  const double d = state_[a].fdist;
+  if (nh.blabel == st) offer_circuit(d + nh.bdist, a, h);
+  if (nh.fsettled == st) return;
+  if (nh.flabel != st && nh.blabel != st) touch(h);
+  nh.fdist = d, nh.flabel = nh.fsettled = st, nh.fparent = a;
+  const int id = h - num_dnodes_, c = id / 4, side = (id % 4 + 2) % 4;
+  for (int o = system_.side_begin(c, side); o < system_.side_end(c, side); ++o) forward_label(h, exit_dnode_[o]);
+}
+
+// Backward search: the heap holds hubs. Settling a hub settles the D-nodes entering it at once
+// (arcs into hubs cost 0) and labels the hubs they come from.
+void GeneratingVectorSearch::backward_settle_dnode(int a, int h) {  // arc D-node a -> hub h, h settled backward
+  const uint32_t st = stamp_;
+  const double wa = weight_[a / 2];
+  if (!(wa < kInf)) return;
+  NodeState& na = state_[a];
+  const double d = state_[h].bdist;
+  if (na.flabel == st) offer_circuit(na.fdist + d, a, h);
+  if (a == s_ || na.bsettled == st) return;
+  if (na.flabel != st && na.blabel != st) touch(a);
+  na.bdist = d, na.blabel = na.bsettled = st, na.bparent = h;
+  const int p = prev_hub_[a];
+  if (p < 0) {
+    if (d + wa < source_cost_) source_cost_ = d + wa, source_ = a;
+    return;
+  }
+  NodeState& np = state_[p];
+  const double nd = d + wa;  // arc p -> a costs the weight of a
+  if (np.flabel == st) offer_circuit(np.fdist + nd, p, a);
+  if (np.bsettled == st) return;
+  if (np.blabel == st) {
+    if (np.bdist <= nd) return;
+  } else if (np.flabel != st) {
+    touch(p);
+  }
+  np.bdist = nd, np.blabel = st, np.bparent = a;
+  bheap_.push_back({nd, p});
+  std::push_heap(bheap_.begin(), bheap_.end());
+}
+
+void GeneratingVectorSearch::backward_settle_hub(int h) {
+  const int id = h - num_dnodes_, c = id / 4, side = id % 4;
+  for (int o = system_.side_begin(c, side); o < system_.side_end(c, side); ++o)
+    backward_settle_dnode(enter_dnode_[o], h);
+}
+
+void GeneratingVectorSearch::start_fronts() {
+  const uint32_t st = stamp_;
   // s itself may be a sink or a source (an edge on the boundary).
-  if (next_hub_[s] < 0) sink_cost = 0, sink = s;
-  forward_settle(s);
-  if (const int p = prev_hub_[s]; p < 0) {
-    source_cost = weight[edge], source = s;
+  if (next_hub_[s_] < 0) sink_cost_ = 0, sink_ = s_;
+  forward_settle(s_);
+  const double ws = weight_[s_ / 2];
+  if (const int p = prev_hub_[s_]; p < 0) {
+    source_cost_ = ws, source_ = s_;
   } else {
-    NodeState& np = state[p];
-    np.bdist = weight[edge], np.blabel = st, np.bparent = s;
-    if (np.flabel == st && np.fdist + np.bdist < best_cycle) best_cycle = np.fdist + np.bdist, cycle_a = p, cycle_b = s;
+    NodeState& np = state_[p];
+    np.bdist = ws, np.blabel = st, np.bparent = s_;
+    if (np.flabel == st) offer_circuit(np.fdist + np.bdist, p, s_);
     if (np.flabel != st) touch(p);
     bheap_.push_back({np.bdist, p});
   }
+}
 
+void GeneratingVectorSearch::grow_fronts() {
   for (;;) {
     const double top_f = fheap_.empty() ? kInf : fheap_.front().dist;
     const double top_b = bheap_.empty() ? kInf : bheap_.front().dist;
-    const double best = std::min(best_cycle, sink_cost + source_cost);
-    const double bound = std::min(top_f + top_b, std::min(sink_cost, top_f) + std::min(source_cost, top_b));
+    const double best = std::min(best_cycle_, sink_cost_ + source_cost_);
+    const double bound = std::min(top_f + top_b, std::min(sink_cost_, top_f) + std::min(source_cost_, top_b));
     if (bound >= best) break;
-    if (top_f <= top_b) {
-      std::pop_heap(fheap_.begin(), fheap_.end());
-      const HeapItem item = fheap_.back();
-      fheap_.pop_back();
-      NodeState& n = state[item.node];
-      if (n.fsettled == st || item.dist > n.fdist) continue;
-      n.fsettled = st;
-      forward_settle(item.node);
-    } else {
-      std::pop_heap(bheap_.begin(), bheap_.end());
-      const HeapItem item = bheap_.back();
-      bheap_.pop_back();
-      NodeState& n = state[item.node];
-      if (n.bsettled == st || item.dist > n.bdist) continue;
-      n.bsettled = st;
-      backward_settle_hub(item.node);
-    }
+    if (top_f <= top_b) settle_next_forward();
+    else settle_next_backward();
   }
+}
 
-  const double best = std::min(best_cycle, sink_cost + source_cost);
+void GeneratingVectorSearch::settle_next_forward() {
+  std::pop_heap(fheap_.begin(), fheap_.end());
+  const HeapItem item = fheap_.back();
+  fheap_.pop_back();
+  NodeState& n = state_[item.node];
+  if (n.fsettled == stamp_ || item.dist > n.fdist) return;
+  n.fsettled = stamp_;
+  forward_settle(item.node);
+}
+
+void GeneratingVectorSearch::settle_next_backward() {
+  std::pop_heap(bheap_.begin(), bheap_.end());
+  const HeapItem item = bheap_.back();
+  bheap_.pop_back();
+  NodeState& n = state_[item.node];
+  if (n.bsettled == stamp_ || item.dist > n.bdist) return;
+  n.bsettled = stamp_;
+  backward_settle_hub(item.node);
+}
+
+bool GeneratingVectorSearch::trace_result(std::vector<int>& dnodes) const {
+  const double best = std::min(best_cycle_, sink_cost_ + source_cost_);
   if (!(best < kInf)) return false;
-  std::vector<int> chain;
-  auto push_dnode = [&](int n) {
-    if (!sys.is_hub(n)) dnodes.push_back(n);
-  };
-  const bool is_path = sink_cost + source_cost < best_cycle;
-  if (is_path) {
-    // source -> ... -> s -> ... -> sink
-    for (int n = source;; n = state[n].bparent) {
-      push_dnode(n);
-      if (n == s) break;
-    }
-    for (int n = sink; n != s; n = state[n].fparent) chain.push_back(n);
-    for (auto it = chain.rbegin(); it != chain.rend(); ++it) push_dnode(*it);
-  } else {
-    // s -> ... -> a -> b -> ... -> s
-    for (int n = cycle_a;; n = state[n].fparent) {
-      chain.push_back(n);
-      if (n == s) break;
-    }
-    for (auto it = chain.rbegin(); it != chain.rend(); ++it) push_dnode(*it);
-    for (int n = cycle_b; n != s; n = state[n].bparent) push_dnode(n);
-  }
-  make_elementary(dnodes, s, is_path);
+  const bool is_path = sink_cost_ + source_cost_ < best_cycle_;
+  if (is_path) trace_path(dnodes);
+  else trace_circuit(dnodes);
+  make_elementary(dnodes, s_, is_path);
   return true;
+}
+
+void GeneratingVectorSearch::trace_path(std::vector<int>& dnodes) const {
+  // source -> ... -> s -> ... -> sink
+  for (int n = source_;; n = state_[n].bparent) {
+    push_dnode(n, dnodes);
+    if (n == s_) break;
+  }
+  std::vector<int> chain;
+  for (int n = sink_; n != s_; n = state_[n].fparent) chain.push_back(n);
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) push_dnode(*it, dnodes);
+}
+
+void GeneratingVectorSearch::trace_circuit(std::vector<int>& dnodes) const {
+  // s -> ... -> a -> b -> ... -> s
+  std::vector<int> chain;
+  for (int n = cycle_a_;; n = state_[n].fparent) {
+    chain.push_back(n);
+    if (n == s_) break;
+  }
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) push_dnode(*it, dnodes);
+  for (int n = cycle_b_; n != s_; n = state_[n].bparent) push_dnode(n, dnodes);
+}
+
+void GeneratingVectorSearch::push_dnode(int n, std::vector<int>& dnodes) const {
+  if (!system_.is_hub(n)) dnodes.push_back(n);
 }
 
 }  // namespace qgp

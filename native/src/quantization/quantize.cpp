@@ -170,60 +170,7 @@ class GreedyQuantizer {
   // labelled nodes); the objective change depends on the circuit's edges only; a collapse found by
   // the validity test persists while the edges of its witness keep their lengths.
   void stage2(QuantizationResult& r) {
-    const int E = system_.num_edges();
-    const int num_candidates = 2 * E;  // candidate 2e: subtract at e, 2e+1: add at e
-    generation_.assign(num_candidates, 0);
-    dependency_count_.assign(num_candidates, 0);
-    build_clusters(1);  // exact: one edge per cluster, until the memory budget is reached
-    strong_deps_.assign(E, {});
-    weak_deps_.assign(num_clusters_, {});
-    live_dependencies_ = stored_dependencies_ = 0;
-    auto weight_of = [&](int cand) { return (cand & 1) ? w_plus_[cand / 2] : w_minus_[cand / 2]; };
-    auto push = [&](int cand) {
-      ++generation_[cand];
-      live_dependencies_ -= dependency_count_[cand];
-      dependency_count_[cand] = 0;
-      const double w = weight_of(cand);
-      if (w < kInf) heap_.push({w, cand, generation_[cand]});
-    };
-    for (int cand = 0; cand < num_candidates; ++cand) push(cand);
-    std::vector<int> explored, witness, strong;
-    std::vector<uint32_t> edge_seen(E, 0), cluster_seen(E, 0);
-    uint32_t seen_stamp = 0;
-    // The candidate stays out of the heap until an edge in `strong` changes, or an edge in
-    // `explored` gets lighter for it (recorded per cluster of edges, to bound memory: a lighter
-    // edge anywhere in the cluster re-evaluates the candidate, which is merely conservative).
-    auto remember_failure = [&](int cand) {
-      const uint32_t gen = ++generation_[cand];
-      if (++seen_stamp == 0) {
-        std::fill(edge_seen.begin(), edge_seen.end(), 0);
-        std::fill(cluster_seen.begin(), cluster_seen.end(), 0);
-        seen_stamp = 1;
-      }
-      int64_t count = 0;
-      for (int e : strong)
-        if (edge_seen[e] != seen_stamp) edge_seen[e] = seen_stamp, strong_deps_[e].push_back({cand, gen}), ++count;
-      for (int e : explored) {
-        const int k = cluster_of_[e];
-        if (cluster_seen[k] != seen_stamp) cluster_seen[k] = seen_stamp, weak_deps_[k].push_back({cand, gen}), ++count;
-      }
-      dependency_count_[cand] = count;
-      live_dependencies_ += count;
-      stored_dependencies_ += count;
-      if (stored_dependencies_ > 4 * live_dependencies_ + (int64_t(1) << 20)) compact_dependencies();
-      if (live_dependencies_ > options_.cache_budget && num_clusters_ == E) coarsen_weak_dependencies();
-    };
-    auto invalidate_stale_and = [&](std::vector<std::pair<int, uint32_t>>& list, auto&& keep) {
-      size_t kept = 0;
-      for (const auto& d : list) {
-        if (generation_[d.first] != d.second) continue;  // stale
-        if (keep(d.first)) list[kept++] = d;
-        else push(d.first);
-      }
-      stored_dependencies_ -= static_cast<int64_t>(list.size() - kept);
-      list.resize(kept);
-    };
-
+    start_stage2();
     Timer tick, elapsed;
     int64_t evaluated = 0;
     double fraction = 0.3;
@@ -241,57 +188,136 @@ class GreedyQuantizer {
         tick = Timer();
       }
       ++evaluated;
-      const int cand = top.candidate, e = cand / 2, sign = (cand & 1) ? +1 : -1;
-      const std::vector<double>& weights = sign > 0 ? w_plus_ : w_minus_;
-      explored.clear();
-      strong.clear();
-      ++searches_;
-      if (!search_.find(e, weights, dnodes_, &explored)) {
-        remember_failure(cand);
-        continue;
-      }
-      collect_changes(dnodes_, sign);
-      for (const Change& c : changes_) strong.push_back(c.edge);
-      bool feasible = true;
-      // x >= 0, and >= min_length unless stage I left the edge below it (no generating vector).
-      for (const Change& c : changes_)
-        feasible = feasible && x_[c.edge] + c.delta >= std::min(min_length_[c.edge], x_[c.edge]);
-      double approx = 0;
-      if (!feasible || objective_change_sign(changes_, x_, ideal_, &approx) >= 0) {
-        ++r.stage2_not_improving;
-        remember_failure(cand);
-        continue;
-      }
-      apply_changes(+1);
-      witness.clear();
-      ++r.validity_checks;
-      Timer check_timer;
-      changed_edges_.clear();
-      for (const Change& c : changes_) changed_edges_.push_back(c.edge);
-      const bool valid = validity_.check_changed(x_, changed_edges_, &witness, true).valid;
-      r.validity_seconds += check_timer.seconds();
-      if (!valid) {
-        apply_changes(-1);
-        ++r.stage2_rejected_invalid;
-        strong.insert(strong.end(), witness.begin(), witness.end());
-        remember_failure(cand);
-        continue;
-      }
-      // Accepted.
-      ++r.stage2_steps;
-      (sign > 0 ? r.stage2_additions : r.stage2_subtractions)++;
-      objective_ = options_.recompute_objective_each_step ? full_objective() : objective_ + approx;
-      r.objective_history.push_back(objective_);
-      // An addition makes w- lighter (subtraction candidates), a subtraction makes w+ lighter.
-      const int lighter_parity = sign > 0 ? 0 : 1;
-      for (const Change& c : changes_) {
-        push(2 * c.edge);
-        push(2 * c.edge + 1);
-        invalidate_stale_and(strong_deps_[c.edge], [](int) { return false; });
-        invalidate_stale_and(weak_deps_[cluster_of_[c.edge]], [&](int cand) { return (cand & 1) != lighter_parity; });
-      }
+      evaluate_candidate(top.candidate, r);
     }
     progress_.update(1);
+  }
+  // Clears the failure cache and queues every candidate.
+  void start_stage2() {
+    const int E = system_.num_edges();
+    const int num_candidates = 2 * E;  // candidate 2e: subtract at e, 2e+1: add at e
+    generation_.assign(num_candidates, 0);
+    dependency_count_.assign(num_candidates, 0);
+    build_clusters(1);  // exact: one edge per cluster, until the memory budget is reached
+    strong_deps_.assign(E, {});
+    weak_deps_.assign(num_clusters_, {});
+    live_dependencies_ = stored_dependencies_ = 0;
+    for (int cand = 0; cand < num_candidates; ++cand) push_candidate(cand);
+    edge_seen_.assign(E, 0);
+    cluster_seen_.assign(E, 0);
+    seen_stamp_ = 0;
+  }
+  // The weight of a candidate's edge in the direction it changes (w+ to add, w- to subtract).
+  double candidate_weight(int cand) const { return (cand & 1) ? w_plus_[cand / 2] : w_minus_[cand / 2]; }
+  // (Re)queues a candidate with its current weight, dropping its cached failure; not if excluded.
+  void push_candidate(int cand) {
+    ++generation_[cand];
+    live_dependencies_ -= dependency_count_[cand];
+    dependency_count_[cand] = 0;
+    const double w = candidate_weight(cand);
+    if (w < kInf) heap_.push({w, cand, generation_[cand]});
+  }
+  // Searches the candidate's generating vector and applies it if it improves the objective and
+  // keeps validity; otherwise caches the failure with what it depends on.
+  void evaluate_candidate(int cand, QuantizationResult& r) {
+    const int e = cand / 2, sign = (cand & 1) ? +1 : -1;
+    const std::vector<double>& weights = sign > 0 ? w_plus_ : w_minus_;
+    explored_.clear();
+    strong_.clear();
+    ++searches_;
+    if (!search_.find(e, weights, dnodes_, &explored_)) {
+      remember_failure(cand);
+      return;
+    }
+    collect_changes(dnodes_, sign);
+    for (const Change& c : changes_) strong_.push_back(c.edge);
+    double approx = 0;
+    if (!step_is_feasible() || objective_change_sign(changes_, x_, ideal_, &approx) >= 0) {
+      ++r.stage2_not_improving;
+      remember_failure(cand);
+      return;
+    }
+    if (!apply_if_valid(r)) {
+      ++r.stage2_rejected_invalid;
+      strong_.insert(strong_.end(), witness_.begin(), witness_.end());
+      remember_failure(cand);
+      return;
+    }
+    accept_step(sign, approx, r);
+  }
+  // Whether the lengths after changes_ are allowed.
+  bool step_is_feasible() const {
+    bool feasible = true;
+    // x >= 0, and >= min_length unless stage I left the edge below it (no generating vector).
+    for (const Change& c : changes_)
+      feasible = feasible && x_[c.edge] + c.delta >= std::min(min_length_[c.edge], x_[c.edge]);
+    return feasible;
+  }
+  // Applies changes_ and keeps them if the validity test passes (committing the lengths); else
+  // reverts them, leaving the test's witness in witness_. Returns whether they were kept.
+  bool apply_if_valid(QuantizationResult& r) {
+    apply_changes(+1);
+    witness_.clear();
+    ++r.validity_checks;
+    Timer check_timer;
+    changed_edges_.clear();
+    for (const Change& c : changes_) changed_edges_.push_back(c.edge);
+    const bool valid = validity_.check_changed(x_, changed_edges_, &witness_, true).valid;
+    r.validity_seconds += check_timer.seconds();
+    if (!valid) apply_changes(-1);
+    return valid;
+  }
+  // Counts an accepted (applied) step, updates the objective and re-queues the candidates whose
+  // evaluation it may change.
+  void accept_step(int sign, double approx, QuantizationResult& r) {
+    ++r.stage2_steps;
+    (sign > 0 ? r.stage2_additions : r.stage2_subtractions)++;
+    objective_ = options_.recompute_objective_each_step ? full_objective() : objective_ + approx;
+    r.objective_history.push_back(objective_);
+    // An addition makes w- lighter (subtraction candidates), a subtraction makes w+ lighter.
+    const int lighter_parity = sign > 0 ? 0 : 1;
+    for (const Change& c : changes_) {
+      push_candidate(2 * c.edge);
+      push_candidate(2 * c.edge + 1);
+      requeue_dependents(strong_deps_[c.edge], [](int) { return false; });
+      requeue_dependents(weak_deps_[cluster_of_[c.edge]], [&](int cand) { return (cand & 1) != lighter_parity; });
+    }
+  }
+  // The candidate stays out of the heap until an edge in `strong_` changes, or an edge in
+  // `explored_` gets lighter for it (recorded per cluster of edges, to bound memory: a lighter
+  // edge anywhere in the cluster re-evaluates the candidate, which is merely conservative).
+  void remember_failure(int cand) {
+    const uint32_t gen = ++generation_[cand];
+    if (++seen_stamp_ == 0) {
+      std::fill(edge_seen_.begin(), edge_seen_.end(), 0);
+      std::fill(cluster_seen_.begin(), cluster_seen_.end(), 0);
+      seen_stamp_ = 1;
+    }
+    int64_t count = 0;
+    for (int e : strong_)
+      if (edge_seen_[e] != seen_stamp_) edge_seen_[e] = seen_stamp_, strong_deps_[e].push_back({cand, gen}), ++count;
+    for (int e : explored_) {
+      const int k = cluster_of_[e];
+      if (cluster_seen_[k] != seen_stamp_)
+        cluster_seen_[k] = seen_stamp_, weak_deps_[k].push_back({cand, gen}), ++count;
+    }
+    dependency_count_[cand] = count;
+    live_dependencies_ += count;
+    stored_dependencies_ += count;
+    if (stored_dependencies_ > 4 * live_dependencies_ + (int64_t(1) << 20)) compact_dependencies();
+    if (live_dependencies_ > options_.cache_budget && num_clusters_ == system_.num_edges()) coarsen_weak_dependencies();
+  }
+  // Drops the stale entries of a dependency list and re-queues the live ones `keep` rejects.
+  template <class Keep>
+  void requeue_dependents(std::vector<std::pair<int, uint32_t>>& list, Keep&& keep) {
+    size_t kept = 0;
+    for (const auto& d : list) {
+      if (generation_[d.first] != d.second) continue;  // stale
+      if (keep(d.first)) list[kept++] = d;
+      else push_candidate(d.first);
+    }
+    stored_dependencies_ -= static_cast<int64_t>(list.size() - kept);
+    list.resize(kept);
   }
 
   // Groups of about `size` edges that are close in the T-mesh (grown through cells).
@@ -397,6 +423,11 @@ class GreedyQuantizer {
   int num_clusters_ = 0;
   std::vector<int64_t> dependency_count_;
   int64_t live_dependencies_ = 0, stored_dependencies_ = 0;
+  // Stage II scratch: the explored region, the validity witness and the edges a failure depends
+  // on strongly (see remember_failure); per edge and cluster the stamp deduplicating them.
+  std::vector<int> explored_, witness_, strong_;
+  std::vector<uint32_t> edge_seen_, cluster_seen_;
+  uint32_t seen_stamp_ = 0;
 };
 
 }  // namespace

@@ -98,27 +98,52 @@ void ValidityChecker::begin_check() {
 
 bool ValidityChecker::search(int i, const std::vector<int64_t>& x, QuantizationValidity& result,
                              std::vector<int>* witness, std::vector<int>* cells) {
-  const TMesh& tm = sys_.tmesh();
   ++searched_;
+  begin_search(i, x, result, cells);
+  if (node_stamp_[i] == stamp_) return reached_before(witness);
+  collect_trivial_nodes();
+  stack_.clear();
+  visit({i, -1, 0}, -1, -1, -1);
+  explore();
+  reads_ = nullptr;
+  if (violation_ < 0) return true;
+  if (witness) add_violation_witness(*witness);
+  return false;
+}
+
+void ValidityChecker::begin_search(int i, const std::vector<int64_t>& x, QuantizationValidity& result,
+                                   std::vector<int>* cells) {
+  source_ = i;
+  x_ = &x;
+  result_ = &result;
   // A feature source's zero-distance set may share points with others' (along its own curve):
   // it is explored on its own. Singular sources come first in every check, sharing marks.
-  const bool feature_source = !is_singular_[i];
-  if (feature_source) begin_check();
+  feature_source_ = !is_singular_[i];
+  if (feature_source_) begin_check();
   reads_ = cells;
   if (cells && ++read_stamp_ == 0) {
     std::fill(cell_seen_.begin(), cell_seen_.end(), 0);
     read_stamp_ = 1;
   }
-  int violation = -1, violation2 = -1;  // trail indices whose chains explain the violation
-  if (node_stamp_[i] == stamp_) {  // reached from another singularity already (not expected)
-    violation = node_trail_[i];
-    result.valid = false;
-    result.node = trail_[violation].owner, result.other_node = i;
-    if (witness) add_witness(violation, *witness);
-    reads_ = nullptr;
-    return false;
-  }
+  violation_ = violation2_ = -1;
+}
+
+bool ValidityChecker::reached_before(std::vector<int>* witness) {
+  // Reached from another singularity already (not expected).
+  const int i = source_;
+  violation_ = node_trail_[i];
+  result_->valid = false;
+  result_->node = trail_[violation_].owner, result_->other_node = i;
+  if (witness) add_witness(violation_, *witness);
+  reads_ = nullptr;
+  return false;
+}
+
+void ValidityChecker::collect_trivial_nodes() {
   // The zero-length continuation of i's own feature curves may collapse onto i.
+  const TMesh& tm = sys_.tmesh();
+  const std::vector<int64_t>& x = *x_;
+  const int i = source_;
   if (++trivial_id_ == 0) {
     std::fill(trivial_stamp_.begin(), trivial_stamp_.end(), 0);
     trivial_id_ = 1;
@@ -136,93 +161,106 @@ bool ValidityChecker::search(int i, const std::vector<int64_t>& x, QuantizationV
         if (trivial_stamp_[m] != trivial_id_) trivial_stamp_[m] = trivial_id_, trivial_nodes_.push_back(m);
     }
   }
+}
 
-  stack_.clear();
-  auto visit = [&](const Point& p, int parent, int via_edge, int via_cell) {
-    const int index = static_cast<int>(trail_.size());
-    const int before = mark(p, index);
-    if (before >= 0) {
-      if (trail_[before].owner != i) {  // the zero-distance sets of two singularities meet
-        trail_.push_back({p, i, parent, via_edge, via_cell});
-        result.valid = false;
-        result.node = i, result.other_node = trail_[before].owner;
-        violation = index, violation2 = before;
-      }
-      return;
+void ValidityChecker::visit(const Point& p, int parent, int via_edge, int via_cell) {
+  const int i = source_;
+  const int index = static_cast<int>(trail_.size());
+  const int before = mark(p, index);
+  if (before >= 0) {
+    if (trail_[before].owner != i) {  // the zero-distance sets of two singularities meet
+      trail_.push_back({p, i, parent, via_edge, via_cell});
+      result_->valid = false;
+      result_->node = i, result_->other_node = trail_[before].owner;
+      violation_ = index, violation2_ = before;
     }
-    trail_.push_back({p, i, parent, via_edge, via_cell});
-    if (p.node >= 0) {
-      // (A feature point at zero distance from a singular node is that node's violation.)
-      if (p.node != i && is_singular_[p.node] && !feature_source) {
-        result.valid = false;
-        result.node = i, result.other_node = p.node;
-        violation = index;
-        return;
-      }
-      if (is_feature_point_[p.node] && trivial_stamp_[p.node] != trivial_id_) {
-        result.valid = false;
-        result.node = i;
-        for (int k = sys_.node_edge_offset[p.node]; k < sys_.node_edge_offset[p.node + 1]; ++k)
-          if (tm.edges[sys_.node_edge[k]].on_feature) result.feature_edge = sys_.node_edge[k];
-        violation = index;
-        return;
-      }
-    } else if (tm.edges[p.edge].on_feature) {
+    return;
+  }
+  trail_.push_back({p, i, parent, via_edge, via_cell});
+  if (new_point_violates(p)) violation_ = index;
+  else stack_.push_back(index);
+}
+
+bool ValidityChecker::new_point_violates(const Point& p) {
+  const TMesh& tm = sys_.tmesh();
+  const int i = source_;
+  QuantizationValidity& result = *result_;
+  if (p.node >= 0) {
+    // (A feature point at zero distance from a singular node is that node's violation.)
+    if (p.node != i && is_singular_[p.node] && !feature_source_) {
       result.valid = false;
-      result.node = i, result.feature_edge = p.edge;
-      violation = index;
-      return;
+      result.node = i, result.other_node = p.node;
+      return true;
     }
-    stack_.push_back(index);
-  };
-  // Crossing a cell from side `sid` at `offset` when its perpendicular extent is zero.
-  auto cross = [&](int sid, int64_t offset, int parent) {
-    const int c = sid / 4, s = sid % 4;
-    read_cell(c);
-    if (sys_.side_sum(x, 4 * c + (s + 1) % 4) != 0) return;
-    const int64_t length = sys_.side_sum(x, sid);
-    visit(point_on_side(x, 4 * c + (s + 2) % 4, length - offset), parent, -1, c);
-  };
+    if (is_feature_point_[p.node] && trivial_stamp_[p.node] != trivial_id_) {
+      result.valid = false;
+      result.node = i;
+      for (int k = sys_.node_edge_offset[p.node]; k < sys_.node_edge_offset[p.node + 1]; ++k)
+        if (tm.edges[sys_.node_edge[k]].on_feature) result.feature_edge = sys_.node_edge[k];
+      return true;
+    }
+  } else if (tm.edges[p.edge].on_feature) {
+    result.valid = false;
+    result.node = i, result.feature_edge = p.edge;
+    return true;
+  }
+  return false;
+}
 
-  visit({i, -1, 0}, -1, -1, -1);
-  while (!stack_.empty() && violation < 0) {
+void ValidityChecker::cross(int sid, int64_t offset, int parent) {
+  const std::vector<int64_t>& x = *x_;
+  const int c = sid / 4, s = sid % 4;
+  read_cell(c);
+  if (sys_.side_sum(x, 4 * c + (s + 1) % 4) != 0) return;
+  const int64_t length = sys_.side_sum(x, sid);
+  visit(point_on_side(x, 4 * c + (s + 2) % 4, length - offset), parent, -1, c);
+}
+
+void ValidityChecker::explore() {
+  while (!stack_.empty() && violation_ < 0) {
     const int index = stack_.back();
     stack_.pop_back();
     const Point p = trail_[index].point;
-    if (p.node >= 0) {
-      const int n = p.node;
-      for (int k = sys_.node_edge_offset[n]; k < sys_.node_edge_offset[n + 1] && violation < 0; ++k) {
-        const int e = sys_.node_edge[k];
-        read_edge(e);
-        if (x[e] != 0) continue;
-        const int other = tm.edges[e].from == n ? tm.edges[e].to : tm.edges[e].from;
-        visit({other, -1, 0}, index, e, -1);
-      }
-      for (int k = sys_.node_pos_offset[n]; k < sys_.node_pos_offset[n + 1] && violation < 0; ++k) {
-        const auto [sid, pos] = sys_.node_pos[k];
-        cross(sid, sys_.side_prefix(x, sid, pos), index);
-      }
-    } else {
-      read_edge(p.edge);
-      for (int j = 0; j < 2 && violation < 0; ++j) {
-        const EdgeSlot& sl = sys_.slot[p.edge][j];
-        if (sl.cell < 0) continue;
-        const int sid = 4 * sl.cell + sl.side;
-        const int64_t inside = j == 0 ? p.t : x[p.edge] - p.t;
-        cross(sid, sys_.side_prefix(x, sid, sl.occurrence - sys_.side_offset[sid]) + inside, index);
-      }
-    }
+    if (p.node >= 0) explore_node(index, p.node);
+    else explore_edge_point(index, p);
   }
-  reads_ = nullptr;
-  if (violation < 0) return true;
-  if (witness) {
-    add_witness(violation, *witness);
-    if (violation2 >= 0) add_witness(violation2, *witness);
-    for (int n : trivial_nodes_)
-      for (int k = sys_.node_edge_offset[n]; k < sys_.node_edge_offset[n + 1]; ++k)
-        if (tm.edges[sys_.node_edge[k]].on_feature) witness->push_back(sys_.node_edge[k]);
+}
+
+void ValidityChecker::explore_node(int index, int n) {
+  const TMesh& tm = sys_.tmesh();
+  const std::vector<int64_t>& x = *x_;
+  for (int k = sys_.node_edge_offset[n]; k < sys_.node_edge_offset[n + 1] && violation_ < 0; ++k) {
+    const int e = sys_.node_edge[k];
+    read_edge(e);
+    if (x[e] != 0) continue;
+    const int other = tm.edges[e].from == n ? tm.edges[e].to : tm.edges[e].from;
+    visit({other, -1, 0}, index, e, -1);
   }
-  return false;
+  for (int k = sys_.node_pos_offset[n]; k < sys_.node_pos_offset[n + 1] && violation_ < 0; ++k) {
+    const auto [sid, pos] = sys_.node_pos[k];
+    cross(sid, sys_.side_prefix(x, sid, pos), index);
+  }
+}
+
+void ValidityChecker::explore_edge_point(int index, const Point& p) {
+  const std::vector<int64_t>& x = *x_;
+  read_edge(p.edge);
+  for (int j = 0; j < 2 && violation_ < 0; ++j) {
+    const EdgeSlot& sl = sys_.slot[p.edge][j];
+    if (sl.cell < 0) continue;
+    const int sid = 4 * sl.cell + sl.side;
+    const int64_t inside = j == 0 ? p.t : x[p.edge] - p.t;
+    cross(sid, sys_.side_prefix(x, sid, sl.occurrence - sys_.side_offset[sid]) + inside, index);
+  }
+}
+
+void ValidityChecker::add_violation_witness(std::vector<int>& witness) const {
+  const TMesh& tm = sys_.tmesh();
+  add_witness(violation_, witness);
+  if (violation2_ >= 0) add_witness(violation2_, witness);
+  for (int n : trivial_nodes_)
+    for (int k = sys_.node_edge_offset[n]; k < sys_.node_edge_offset[n + 1]; ++k)
+      if (tm.edges[sys_.node_edge[k]].on_feature) witness.push_back(sys_.node_edge[k]);
 }
 
 void ValidityChecker::describe(QuantizationValidity& result) const {

@@ -63,6 +63,28 @@ class ValidityChecker {
   // appends the cells whose lengths the search read.
   bool search(int i, const std::vector<int64_t>& x, QuantizationValidity& result, std::vector<int>* witness,
               std::vector<int>* cells);
+  // Phases of search(); they share the state of the search in progress (source_ ... violation2_).
+  // Sets up the search from i; a feature source gets a check of its own.
+  void begin_search(int i, const std::vector<int64_t>& x, QuantizationValidity& result, std::vector<int>* cells);
+  // The source was reached by an earlier source's search: records that violation, returns false.
+  bool reached_before(std::vector<int>* witness);
+  // trivial_nodes_: the source and the nodes joined to it by zero-length feature edges.
+  void collect_trivial_nodes();
+  // Adds a point reached from trail index `parent` to the trail and the stack, or records the
+  // violation it reveals.
+  void visit(const Point& p, int parent, int via_edge, int via_cell);
+  // Whether the newly reached point p is a violation; if so fills *result_.
+  bool new_point_violates(const Point& p);
+  // Crossing a cell from side `sid` at `offset` when its perpendicular extent is zero.
+  void cross(int sid, int64_t offset, int parent);
+  // Pops and explores stacked points until none is left or a violation is found.
+  void explore();
+  // Moves from node n (trail index `index`) along zero-length edges and across zero-extent cells.
+  void explore_node(int index, int n);
+  // Moves from a point inside an edge across the zero-extent cells on either side.
+  void explore_edge_point(int index, const Point& p);
+  // Appends the edges the found violation depends on.
+  void add_violation_witness(std::vector<int>& witness) const;
   Point point_on_side(const std::vector<int64_t>& x, int side_id, int64_t offset) const;
   // Trail index of the point if visited before in this check; else records `index` and returns -1.
   int mark(const Point& p, int index);
@@ -100,6 +122,14 @@ class ValidityChecker {
   std::vector<std::vector<int>> pending_cells_;  // per affected singular node, for commit
   std::vector<uint32_t> affected_seen_;
   uint32_t affected_stamp_ = 0;
+
+  // The search in progress: its source node, the lengths and result it works on, and the trail
+  // indices whose chains explain the violation found (-1: none).
+  int source_ = -1;
+  bool feature_source_ = false;  // the source is a feature point, not a singular node
+  const std::vector<int64_t>* x_ = nullptr;
+  QuantizationValidity* result_ = nullptr;
+  int violation_ = -1, violation2_ = -1;
 };
 
 }  // namespace qgp
