@@ -173,34 +173,47 @@ Insertion insert_traces(const TriMesh& mesh, const TMesh& tmesh, RefinedPoints& 
   return ins;
 }
 
-// Face f of the working mesh cut by its pieces into convex regions, each split into triangles
-// around its centroid; appends them (refined point ids) to `triangles`.
-void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
-                std::vector<int>& source_face) {
+// Face f of the working mesh as a planar graph: its points in the reference triangle (0,0), (1,0),
+// (0,1) (orientation kept), and the edges between them (its sides' steps and the trace pieces).
+struct FaceGraph {
+  std::vector<int> gid;                    // the refined point of each local point
+  std::vector<Vec2> xy;                    // its position in the reference triangle
+  std::vector<int> side_mask;              // bit k: on side k
+  std::vector<int> cycle;                  // corner 0, side 0, corner 1, side 1, corner 2, side 2
+  std::vector<std::vector<int>> adjacent;  // sorted counter-clockwise once connected
+
+  int size() const { return static_cast<int>(gid.size()); }
+  void connect(int a, int b) {
+    if (a == b || std::find(adjacent[a].begin(), adjacent[a].end(), b) != adjacent[a].end()) return;
+    adjacent[a].push_back(b), adjacent[b].push_back(a);
+  }
+};
+
+// The points of face f: the boundary cycle (its corners and the points on its sides), then the
+// points inside it.
+FaceGraph face_points(const TriMesh& mesh, int f, const RefinedPoints& points) {
   // Local points in the reference triangle (0,0), (1,0), (0,1) (orientation kept), and the
   // boundary cycle corner 0, side 0, corner 1, side 1, corner 2, side 2.
-  std::vector<int> gid;
-  std::vector<Vec2> xy;
-  std::vector<int> side_mask;
-  std::vector<int> cycle;
+  FaceGraph g;
   const Vec2 corner[3] = {{0, 0}, {1, 0}, {0, 1}};
   for (int k = 0; k < 3; ++k) {
-    cycle.push_back(static_cast<int>(gid.size()));
-    gid.push_back(mesh.F(f, k)), xy.push_back(corner[k]), side_mask.push_back(1 << k | 1 << (k + 2) % 3);
+    g.cycle.push_back(g.size());
+    g.gid.push_back(mesh.F(f, k)), g.xy.push_back(corner[k]), g.side_mask.push_back(1 << k | 1 << (k + 2) % 3);
     for (const auto& [mu, id] : points.along(3 * f + k)) {
-      cycle.push_back(static_cast<int>(gid.size()));
-      gid.push_back(id), xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), side_mask.push_back(1 << k);
+      g.cycle.push_back(g.size());
+      g.gid.push_back(id), g.xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), g.side_mask.push_back(1 << k);
     }
   }
-  for (const auto& [b, id] : points.inside(f)) gid.push_back(id), xy.push_back({b[1], b[2]}), side_mask.push_back(0);
-  if (gid.size() == 3 && ins.pieces[f].empty()) {
-    triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
-    source_face.push_back(f);
-    return;
-  }
+  for (const auto& [b, id] : points.inside(f)) g.gid.push_back(id), g.xy.push_back({b[1], b[2]}), g.side_mask.push_back(0);
+  return g;
+}
+
+// Connects the boundary cycle and the trace pieces of face f, and records each refined edge on a
+// trace in ins.arc_pieces (a piece along a side: every boundary step it covers).
+void connect_pieces(int f, Insertion& ins, FaceGraph& g) {
   auto local = [&](int id) {
-    for (size_t i = 0; i < gid.size(); ++i)
-      if (gid[i] == id) return static_cast<int>(i);
+    for (size_t i = 0; i < g.gid.size(); ++i)
+      if (g.gid[i] == id) return static_cast<int>(i);
     fail("a trace point of face " + std::to_string(f) + " is not in it");
   };
   auto mark_arc = [&](int a, int b, int edge, int from) {
@@ -208,18 +221,14 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
     if (!added && it->second.edge != edge)
       fail("T-edges " + std::to_string(edge) + " and " + std::to_string(it->second.edge) + " overlap in face " + std::to_string(f));
   };
-  const int n = static_cast<int>(gid.size());
-  std::vector<std::vector<int>> adjacent(n);
-  auto connect = [&](int a, int b) {
-    if (a == b || std::find(adjacent[a].begin(), adjacent[a].end(), b) != adjacent[a].end()) return;
-    adjacent[a].push_back(b), adjacent[b].push_back(a);
-  };
-  for (size_t i = 0; i < cycle.size(); ++i) connect(cycle[i], cycle[(i + 1) % cycle.size()]);
+  const std::vector<int>& cycle = g.cycle;
+  g.adjacent.assign(g.size(), {});
+  for (size_t i = 0; i < cycle.size(); ++i) g.connect(cycle[i], cycle[(i + 1) % cycle.size()]);
   for (const Piece& p : ins.pieces[f]) {
     const int a = local(p.from), b = local(p.to);
-    const int common = side_mask[a] & side_mask[b];
+    const int common = g.side_mask[a] & g.side_mask[b];
     if (!common) {
-      connect(a, b);
+      g.connect(a, b);
       mark_arc(p.from, p.to, p.edge, p.from);
       continue;
     }
@@ -232,58 +241,92 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
     };
     const int pa = position(a), pb = position(b);
     for (int i = std::min(pa, pb); i < std::max(pa, pb); ++i) {
-      const int u = gid[cycle[i % cycle.size()]], v = gid[cycle[(i + 1) % cycle.size()]];
+      const int u = g.gid[cycle[i % cycle.size()]], v = g.gid[cycle[(i + 1) % cycle.size()]];
       mark_arc(u, v, p.edge, pa < pb ? u : v);
     }
   }
-  // Faces of the planar graph: turn to the next edge clockwise at every point.
-  for (int a = 0; a < n; ++a)
-    std::sort(adjacent[a].begin(), adjacent[a].end(), [&](int p, int q) {
-      const Vec2 dp = xy[p] - xy[a], dq = xy[q] - xy[a];
+  for (int a = 0; a < g.size(); ++a)
+    std::sort(g.adjacent[a].begin(), g.adjacent[a].end(), [&](int p, int q) {
+      const Vec2 dp = g.xy[p] - g.xy[a], dq = g.xy[q] - g.xy[a];
       return std::atan2(dp.y(), dp.x()) < std::atan2(dq.y(), dq.x());
     });
+}
+
+// The face of the planar graph that starts with a -> b: turn to the next edge clockwise at every
+// point; its directed edges are marked used.
+std::vector<int> trace_polygon(int f, const FaceGraph& g, int a, int b, std::map<PointPair, bool>& used) {
+  std::vector<int> polygon;
+  int u = a, v = b;
+  while (!used[{u, v}]) {
+    used[{u, v}] = true;
+    polygon.push_back(u);
+    const std::vector<int>& around = g.adjacent[v];
+    const int at = static_cast<int>(std::find(around.begin(), around.end(), u) - around.begin());
+    const int w = around[(at + around.size() - 1) % around.size()];
+    u = v, v = w;
+    if (polygon.size() > static_cast<size_t>(4 * g.size())) fail("face " + std::to_string(f) + " has an open region");
+  }
+  return polygon;
+}
+
+// The signed area of a polygon of local points (reference triangle units).
+double polygon_area(const FaceGraph& g, const std::vector<int>& polygon) {
+  double area = 0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec2& p = g.xy[polygon[i]];
+    const Vec2& q = g.xy[polygon[(i + 1) % polygon.size()]];
+    area += 0.5 * (p.x() * q.y() - p.y() * q.x());
+  }
+  return area;
+}
+
+// Appends a convex region of face f as triangles: itself, or a fan around a new point at its
+// centroid.
+void triangulate_region(int f, const FaceGraph& g, const std::vector<int>& polygon, RefinedPoints& points,
+                        std::vector<std::array<int, 3>>& triangles, std::vector<int>& source_face) {
+  const std::vector<int>& gid = g.gid;
+  if (polygon.size() == 3) {
+    triangles.push_back({gid[polygon[0]], gid[polygon[1]], gid[polygon[2]]});
+    source_face.push_back(f);
+    return;
+  }
+  Vec2 centre = Vec2::Zero();
+  for (int l : polygon) centre += g.xy[l];
+  centre /= static_cast<double>(polygon.size());
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec2 p = g.xy[polygon[i]] - centre, q = g.xy[polygon[(i + 1) % polygon.size()]] - centre;
+    if (!(p.x() * q.y() - p.y() * q.x() > 0))
+      fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
+  }
+  const int c = points.add_inside(f, Vec3(1 - centre.x() - centre.y(), centre.x(), centre.y()));
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    triangles.push_back({gid[polygon[i]], gid[polygon[(i + 1) % polygon.size()]], c});
+    source_face.push_back(f);
+  }
+}
+
+// Face f of the working mesh cut by its pieces into convex regions, each split into triangles
+// around its centroid; appends them (refined point ids) to `triangles`.
+void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
+                std::vector<int>& source_face) {
+  FaceGraph g = face_points(mesh, f, points);
+  if (g.gid.size() == 3 && ins.pieces[f].empty()) {
+    triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
+    source_face.push_back(f);
+    return;
+  }
+  connect_pieces(f, ins, g);
+  // Faces of the planar graph: turn to the next edge clockwise at every point.
   std::map<PointPair, bool> used;
   double area_sum = 0;
-  for (int a = 0; a < n; ++a)
-    for (int b : adjacent[a]) {
+  for (int a = 0; a < g.size(); ++a)
+    for (int b : g.adjacent[a]) {
       if (used[{a, b}]) continue;
-      std::vector<int> polygon;
-      int u = a, v = b;
-      while (!used[{u, v}]) {
-        used[{u, v}] = true;
-        polygon.push_back(u);
-        const std::vector<int>& around = adjacent[v];
-        const int at = static_cast<int>(std::find(around.begin(), around.end(), u) - around.begin());
-        const int w = around[(at + around.size() - 1) % around.size()];
-        u = v, v = w;
-        if (polygon.size() > static_cast<size_t>(4 * n)) fail("face " + std::to_string(f) + " has an open region");
-      }
-      double area = 0;
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        const Vec2& p = xy[polygon[i]];
-        const Vec2& q = xy[polygon[(i + 1) % polygon.size()]];
-        area += 0.5 * (p.x() * q.y() - p.y() * q.x());
-      }
+      const std::vector<int> polygon = trace_polygon(f, g, a, b, used);
+      const double area = polygon_area(g, polygon);
       if (area <= 0) continue;  // the outside of the triangle
       area_sum += area;
-      if (polygon.size() == 3) {
-        triangles.push_back({gid[polygon[0]], gid[polygon[1]], gid[polygon[2]]});
-        source_face.push_back(f);
-        continue;
-      }
-      Vec2 centre = Vec2::Zero();
-      for (int l : polygon) centre += xy[l];
-      centre /= static_cast<double>(polygon.size());
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        const Vec2 p = xy[polygon[i]] - centre, q = xy[polygon[(i + 1) % polygon.size()]] - centre;
-        if (!(p.x() * q.y() - p.y() * q.x() > 0))
-          fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
-      }
-      const int c = points.add_inside(f, Vec3(1 - centre.x() - centre.y(), centre.x(), centre.y()));
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        triangles.push_back({gid[polygon[i]], gid[polygon[(i + 1) % polygon.size()]], c});
-        source_face.push_back(f);
-      }
+      triangulate_region(f, g, polygon, points, triangles, source_face);
     }
   if (std::abs(area_sum - 0.5) > 1e-9) fail("traces cross inside face " + std::to_string(f));
 }
