@@ -173,34 +173,47 @@ Insertion insert_traces(const TriMesh& mesh, const TMesh& tmesh, RefinedPoints& 
   return ins;
 }
 
-// Face f of the working mesh cut by its pieces into convex regions, each split into triangles
-// around its centroid; appends them (refined point ids) to `triangles`.
-void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
-                std::vector<int>& source_face) {
+// Face f of the working mesh as a planar graph: its points in the reference triangle (0,0), (1,0),
+// (0,1) (orientation kept), and the edges between them (its sides' steps and the trace pieces).
+struct FaceGraph {
+  std::vector<int> gid;                    // the refined point of each local point
+  std::vector<Vec2> xy;                    // its position in the reference triangle
+  std::vector<int> side_mask;              // bit k: on side k
+  std::vector<int> cycle;                  // corner 0, side 0, corner 1, side 1, corner 2, side 2
+  std::vector<std::vector<int>> adjacent;  // sorted counter-clockwise once connected
+
+  int size() const { return static_cast<int>(gid.size()); }
+  void connect(int a, int b) {
+    if (a == b || std::find(adjacent[a].begin(), adjacent[a].end(), b) != adjacent[a].end()) return;
+    adjacent[a].push_back(b), adjacent[b].push_back(a);
+  }
+};
+
+// The points of face f: the boundary cycle (its corners and the points on its sides), then the
+// points inside it.
+FaceGraph face_points(const TriMesh& mesh, int f, const RefinedPoints& points) {
   // Local points in the reference triangle (0,0), (1,0), (0,1) (orientation kept), and the
   // boundary cycle corner 0, side 0, corner 1, side 1, corner 2, side 2.
-  std::vector<int> gid;
-  std::vector<Vec2> xy;
-  std::vector<int> side_mask;
-  std::vector<int> cycle;
+  FaceGraph g;
   const Vec2 corner[3] = {{0, 0}, {1, 0}, {0, 1}};
   for (int k = 0; k < 3; ++k) {
-    cycle.push_back(static_cast<int>(gid.size()));
-    gid.push_back(mesh.F(f, k)), xy.push_back(corner[k]), side_mask.push_back(1 << k | 1 << (k + 2) % 3);
+    g.cycle.push_back(g.size());
+    g.gid.push_back(mesh.F(f, k)), g.xy.push_back(corner[k]), g.side_mask.push_back(1 << k | 1 << (k + 2) % 3);
     for (const auto& [mu, id] : points.along(3 * f + k)) {
-      cycle.push_back(static_cast<int>(gid.size()));
-      gid.push_back(id), xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), side_mask.push_back(1 << k);
+      g.cycle.push_back(g.size());
+      g.gid.push_back(id), g.xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), g.side_mask.push_back(1 << k);
     }
   }
-  for (const auto& [b, id] : points.inside(f)) gid.push_back(id), xy.push_back({b[1], b[2]}), side_mask.push_back(0);
-  if (gid.size() == 3 && ins.pieces[f].empty()) {
-    triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
-    source_face.push_back(f);
-    return;
-  }
+  for (const auto& [b, id] : points.inside(f)) g.gid.push_back(id), g.xy.push_back({b[1], b[2]}), g.side_mask.push_back(0);
+  return g;
+}
+
+// Connects the boundary cycle and the trace pieces of face f, and records each refined edge on a
+// trace in ins.arc_pieces (a piece along a side: every boundary step it covers).
+void connect_pieces(int f, Insertion& ins, FaceGraph& g) {
   auto local = [&](int id) {
-    for (size_t i = 0; i < gid.size(); ++i)
-      if (gid[i] == id) return static_cast<int>(i);
+    for (size_t i = 0; i < g.gid.size(); ++i)
+      if (g.gid[i] == id) return static_cast<int>(i);
     fail("a trace point of face " + std::to_string(f) + " is not in it");
   };
   auto mark_arc = [&](int a, int b, int edge, int from) {
@@ -208,18 +221,14 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
     if (!added && it->second.edge != edge)
       fail("T-edges " + std::to_string(edge) + " and " + std::to_string(it->second.edge) + " overlap in face " + std::to_string(f));
   };
-  const int n = static_cast<int>(gid.size());
-  std::vector<std::vector<int>> adjacent(n);
-  auto connect = [&](int a, int b) {
-    if (a == b || std::find(adjacent[a].begin(), adjacent[a].end(), b) != adjacent[a].end()) return;
-    adjacent[a].push_back(b), adjacent[b].push_back(a);
-  };
-  for (size_t i = 0; i < cycle.size(); ++i) connect(cycle[i], cycle[(i + 1) % cycle.size()]);
+  const std::vector<int>& cycle = g.cycle;
+  g.adjacent.assign(g.size(), {});
+  for (size_t i = 0; i < cycle.size(); ++i) g.connect(cycle[i], cycle[(i + 1) % cycle.size()]);
   for (const Piece& p : ins.pieces[f]) {
     const int a = local(p.from), b = local(p.to);
-    const int common = side_mask[a] & side_mask[b];
+    const int common = g.side_mask[a] & g.side_mask[b];
     if (!common) {
-      connect(a, b);
+      g.connect(a, b);
       mark_arc(p.from, p.to, p.edge, p.from);
       continue;
     }
@@ -232,58 +241,92 @@ void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& in
     };
     const int pa = position(a), pb = position(b);
     for (int i = std::min(pa, pb); i < std::max(pa, pb); ++i) {
-      const int u = gid[cycle[i % cycle.size()]], v = gid[cycle[(i + 1) % cycle.size()]];
+      const int u = g.gid[cycle[i % cycle.size()]], v = g.gid[cycle[(i + 1) % cycle.size()]];
       mark_arc(u, v, p.edge, pa < pb ? u : v);
     }
   }
-  // Faces of the planar graph: turn to the next edge clockwise at every point.
-  for (int a = 0; a < n; ++a)
-    std::sort(adjacent[a].begin(), adjacent[a].end(), [&](int p, int q) {
-      const Vec2 dp = xy[p] - xy[a], dq = xy[q] - xy[a];
+  for (int a = 0; a < g.size(); ++a)
+    std::sort(g.adjacent[a].begin(), g.adjacent[a].end(), [&](int p, int q) {
+      const Vec2 dp = g.xy[p] - g.xy[a], dq = g.xy[q] - g.xy[a];
       return std::atan2(dp.y(), dp.x()) < std::atan2(dq.y(), dq.x());
     });
+}
+
+// The face of the planar graph that starts with a -> b: turn to the next edge clockwise at every
+// point; its directed edges are marked used.
+std::vector<int> trace_polygon(int f, const FaceGraph& g, int a, int b, std::map<PointPair, bool>& used) {
+  std::vector<int> polygon;
+  int u = a, v = b;
+  while (!used[{u, v}]) {
+    used[{u, v}] = true;
+    polygon.push_back(u);
+    const std::vector<int>& around = g.adjacent[v];
+    const int at = static_cast<int>(std::find(around.begin(), around.end(), u) - around.begin());
+    const int w = around[(at + around.size() - 1) % around.size()];
+    u = v, v = w;
+    if (polygon.size() > static_cast<size_t>(4 * g.size())) fail("face " + std::to_string(f) + " has an open region");
+  }
+  return polygon;
+}
+
+// The signed area of a polygon of local points (reference triangle units).
+double polygon_area(const FaceGraph& g, const std::vector<int>& polygon) {
+  double area = 0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec2& p = g.xy[polygon[i]];
+    const Vec2& q = g.xy[polygon[(i + 1) % polygon.size()]];
+    area += 0.5 * (p.x() * q.y() - p.y() * q.x());
+  }
+  return area;
+}
+
+// Appends a convex region of face f as triangles: itself, or a fan around a new point at its
+// centroid.
+void triangulate_region(int f, const FaceGraph& g, const std::vector<int>& polygon, RefinedPoints& points,
+                        std::vector<std::array<int, 3>>& triangles, std::vector<int>& source_face) {
+  const std::vector<int>& gid = g.gid;
+  if (polygon.size() == 3) {
+    triangles.push_back({gid[polygon[0]], gid[polygon[1]], gid[polygon[2]]});
+    source_face.push_back(f);
+    return;
+  }
+  Vec2 centre = Vec2::Zero();
+  for (int l : polygon) centre += g.xy[l];
+  centre /= static_cast<double>(polygon.size());
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec2 p = g.xy[polygon[i]] - centre, q = g.xy[polygon[(i + 1) % polygon.size()]] - centre;
+    if (!(p.x() * q.y() - p.y() * q.x() > 0))
+      fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
+  }
+  const int c = points.add_inside(f, Vec3(1 - centre.x() - centre.y(), centre.x(), centre.y()));
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    triangles.push_back({gid[polygon[i]], gid[polygon[(i + 1) % polygon.size()]], c});
+    source_face.push_back(f);
+  }
+}
+
+// Face f of the working mesh cut by its pieces into convex regions, each split into triangles
+// around its centroid; appends them (refined point ids) to `triangles`.
+void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
+                std::vector<int>& source_face) {
+  FaceGraph g = face_points(mesh, f, points);
+  if (g.gid.size() == 3 && ins.pieces[f].empty()) {
+    triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
+    source_face.push_back(f);
+    return;
+  }
+  connect_pieces(f, ins, g);
+  // Faces of the planar graph: turn to the next edge clockwise at every point.
   std::map<PointPair, bool> used;
   double area_sum = 0;
-  for (int a = 0; a < n; ++a)
-    for (int b : adjacent[a]) {
+  for (int a = 0; a < g.size(); ++a)
+    for (int b : g.adjacent[a]) {
       if (used[{a, b}]) continue;
-      std::vector<int> polygon;
-      int u = a, v = b;
-      while (!used[{u, v}]) {
-        used[{u, v}] = true;
-        polygon.push_back(u);
-        const std::vector<int>& around = adjacent[v];
-        const int at = static_cast<int>(std::find(around.begin(), around.end(), u) - around.begin());
-        const int w = around[(at + around.size() - 1) % around.size()];
-        u = v, v = w;
-        if (polygon.size() > static_cast<size_t>(4 * n)) fail("face " + std::to_string(f) + " has an open region");
-      }
-      double area = 0;
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        const Vec2& p = xy[polygon[i]];
-        const Vec2& q = xy[polygon[(i + 1) % polygon.size()]];
-        area += 0.5 * (p.x() * q.y() - p.y() * q.x());
-      }
+      const std::vector<int> polygon = trace_polygon(f, g, a, b, used);
+      const double area = polygon_area(g, polygon);
       if (area <= 0) continue;  // the outside of the triangle
       area_sum += area;
-      if (polygon.size() == 3) {
-        triangles.push_back({gid[polygon[0]], gid[polygon[1]], gid[polygon[2]]});
-        source_face.push_back(f);
-        continue;
-      }
-      Vec2 centre = Vec2::Zero();
-      for (int l : polygon) centre += xy[l];
-      centre /= static_cast<double>(polygon.size());
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        const Vec2 p = xy[polygon[i]] - centre, q = xy[polygon[(i + 1) % polygon.size()]] - centre;
-        if (!(p.x() * q.y() - p.y() * q.x() > 0))
-          fail("traces cross or double back inside face " + std::to_string(f) + " (a region is not convex)");
-      }
-      const int c = points.add_inside(f, Vec3(1 - centre.x() - centre.y(), centre.x(), centre.y()));
-      for (size_t i = 0; i < polygon.size(); ++i) {
-        triangles.push_back({gid[polygon[i]], gid[polygon[(i + 1) % polygon.size()]], c});
-        source_face.push_back(f);
-      }
+      triangulate_region(f, g, polygon, points, triangles, source_face);
     }
   if (std::abs(area_sum - 0.5) > 1e-9) fail("traces cross inside face " + std::to_string(f));
 }
@@ -490,11 +533,8 @@ ExactParametrization exact_map(const TriMesh& mesh, const std::vector<Vec2>& cor
   return p;
 }
 
-}  // namespace
-
-CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
-                                Progress& progress, const CellMapOptions& options) {
-  Timer timer;
+// The checks of map_cells_to_rectangles's arguments (Error(InvalidArgument) naming the mismatch).
+void check_cell_map_inputs(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x) {
   if (x.size() != tmesh.edges.size())
     throw Error(ErrorCode::InvalidArgument, "fallback cell map: " + std::to_string(x.size()) + " lengths for " +
                                                 std::to_string(tmesh.edges.size()) + " T-edges");
@@ -516,20 +556,79 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
         if (e < 0 || e >= static_cast<int>(tmesh.edges.size())) invalid("a cell side names a T-edge that does not exist");
   for (int64_t length : x)
     if (length < 0) invalid("a T-edge length is negative");
-  std::vector<CellFrame> frames = cell_frames(tmesh, x);
+}
 
-  // 1. Insert the traces: split every face they touch.
-  RefinedPoints points(mesh);
-  Insertion ins = insert_traces(mesh, tmesh, points, progress);
+// The state of one cell map (paper §7.1.1), built in its phases: the traces inserted into the
+// mesh, the cells found, every cell Tutte-mapped onto its rectangle, the rectangles glued, the map
+// made exact and its degenerate triangles opened.
+class CellMapper {
+ public:
+  CellMapper(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x, Progress& progress,
+             const CellMapOptions& options)
+      : mesh_(mesh), tmesh_(tmesh), x_(x), progress_(progress), options_(options), points_(mesh) {}
+
+  // All the phases; the map without its time.
+  CellMap run();
+
+ private:
+  void insert_traces_into_mesh();
+  void find_cells();
+  double closest_fraction(int v, int w, int edge) const;
+  Vec2 wedge_position(int h) const;
+  void place_trace_points();
+  std::vector<Vec2> solve_tutte(const std::vector<char>& uniform) const;
+  int mark_uniform_around_flips(std::vector<char>& uniform) const;
+  void embed_inner_points();
+  void glue_rectangles();
+  std::vector<int> refined_cone_turns() const;
+  void open_degenerate_triangles(const std::vector<int>& cone_turns);
+  void count_triangles();
+  void count_wound_vertices(const std::vector<int>& cone_turns);
+
+  const TriMesh& mesh_;
+  const TMesh& tmesh_;
+  const std::vector<int64_t>& x_;
+  Progress& progress_;
+  const CellMapOptions& options_;
+  std::vector<CellFrame> frames_;  // #cells
+  RefinedPoints points_;
+  Insertion ins_;
+  CellMap map_;
+  std::vector<Vec2> local_uv_;  // 3#F of the refined mesh: corners in their cell's rectangle
+  std::vector<int> inner_;      // #V of the refined mesh: row in the Tutte system, or -1 (on a trace)
+  int num_inner_ = 0;
+};
+
+CellMap CellMapper::run() {
+  frames_ = cell_frames(tmesh_, x_);
+  insert_traces_into_mesh();
+  find_cells();
+  place_trace_points();
+  embed_inner_points();
+  glue_rectangles();
+  // 5. Exact, and degenerate triangles opened where single moves can.
+  map_.param = exact_map(map_.mesh, map_.corner_uv, options_.fraction_bits);
+  const std::vector<int> cone_turns = refined_cone_turns();
+  open_degenerate_triangles(cone_turns);
+  count_triangles();
+  count_wound_vertices(cone_turns);
+  map_.stats.vertices = map_.mesh.num_vertices();
+  map_.stats.faces = map_.mesh.num_faces();
+  map_.stats.inner_vertices = num_inner_;
+  return std::move(map_);
+}
+
+// 1. Insert the traces: split every face they touch; the refined mesh with its connectivity.
+void CellMapper::insert_traces_into_mesh() {
+  ins_ = insert_traces(mesh_, tmesh_, points_, progress_);
   std::vector<std::array<int, 3>> triangles;
-  CellMap map;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (f % 1024 == 0) progress.check_cancel();
-    split_face(mesh, f, points, ins, triangles, map.source_face);
+  for (int f = 0; f < mesh_.num_faces(); ++f) {
+    if (f % 1024 == 0) progress_.check_cancel();
+    split_face(mesh_, f, points_, ins_, triangles, map_.source_face);
   }
-  TriMesh& refined = map.mesh;
-  refined.V.resize(static_cast<int>(points.position.size()), 3);
-  for (size_t v = 0; v < points.position.size(); ++v) refined.V.row(static_cast<int>(v)) = points.position[v].transpose();
+  TriMesh& refined = map_.mesh;
+  refined.V.resize(static_cast<int>(points_.position.size()), 3);
+  for (size_t v = 0; v < points_.position.size(); ++v) refined.V.row(static_cast<int>(v)) = points_.position[v].transpose();
   refined.F.resize(static_cast<int>(triangles.size()), 3);
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) refined.F(static_cast<int>(t), k) = triangles[t][k];
@@ -538,185 +637,241 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
   } catch (const Error& e) {
     fail(std::string("the mesh with the traces inserted is not a manifold: ") + e.what());
   }
-  ins.arcs.resize(points.position.size());
+  ins_.arcs.resize(points_.position.size());
+}
 
-  // 2. Cells: the regions the traces bound, named by the T-edges on their boundary.
+// 2. Cells: the regions the traces bound, named by the T-edges on their boundary (face_cell).
+void CellMapper::find_cells() {
+  const TriMesh& refined = map_.mesh;
   const int nf = refined.num_faces();
   UnionFind<int> regions(nf);
   for (int h = 0; h < refined.num_halfedges(); ++h) {
     const int o = refined.opposite[h];
-    if (o >= 0 && !ins.arc_pieces.count(key(refined.from(h), refined.to(h)))) regions.unite(h / 3, o / 3);
+    if (o >= 0 && !ins_.arc_pieces.count(key(refined.from(h), refined.to(h)))) regions.unite(h / 3, o / 3);
   }
   std::vector<int> region_cell(nf, -1);
   for (int h = 0; h < refined.num_halfedges(); ++h) {
-    const auto it = ins.arc_pieces.find(key(refined.from(h), refined.to(h)));
-    if (it == ins.arc_pieces.end()) continue;
-    const auto& cells = tmesh.edges[it->second.edge].cells;
+    const auto it = ins_.arc_pieces.find(key(refined.from(h), refined.to(h)));
+    if (it == ins_.arc_pieces.end()) continue;
+    const auto& cells = tmesh_.edges[it->second.edge].cells;
     const int cell = refined.from(h) == it->second.from ? cells[0] : cells[1];  // the face of h is on its left
     int& assigned = region_cell[regions.find(h / 3)];
     if (assigned >= 0 && assigned != cell)
       fail("the traces do not separate cells " + std::to_string(assigned) + " and " + std::to_string(cell));
     assigned = cell;
   }
-  std::vector<int> cell_region(tmesh.cells.size(), -1);
-  map.face_cell.resize(nf);
+  std::vector<int> cell_region(tmesh_.cells.size(), -1);
+  map_.face_cell.resize(nf);
   for (int t = 0; t < nf; ++t) {
     const int r = regions.find(t), cell = region_cell[r];
     if (cell < 0) fail("a region of the surface touches no trace");
     if (cell_region[cell] >= 0 && cell_region[cell] != r) fail("cell " + std::to_string(cell) + " falls apart into two regions");
     cell_region[cell] = r;
-    map.face_cell[t] = cell;
+    map_.face_cell[t] = cell;
   }
-  for (size_t c = 0; c < tmesh.cells.size(); ++c)
+  for (size_t c = 0; c < tmesh_.cells.size(); ++c)
     if (cell_region[c] < 0) fail("cell " + std::to_string(c) + " covers no part of the surface");
+}
 
-  // 3. Trace points on their rectangles' boundaries, per wedge (a cell can touch a node twice);
-  //    inner points by the Tutte embedding.
-  const int nv = refined.num_vertices();
-  auto closest_fractions = [&](int v, int w, int edge) {  // v's fraction on `edge` nearest w's
-    double best = -1, gap = 2;
-    for (const auto& [ev, tv] : ins.arcs[v])
-      for (const auto& [ew, tw] : ins.arcs[w])
-        if (ev == edge && ew == edge && std::abs(tv - tw) < gap) best = tv, gap = std::abs(tv - tw);
-    return best;
-  };
-  auto wedge_position = [&](int h) -> Vec2 {  // of from(h) in the cell of face h / 3
-    const int v = refined.from(h), cell = map.face_cell[h / 3];
-    for (int g = h, step = 0; g >= 0 && step < 4096; g = refined.rotate_cw(g), ++step) {
-      const auto it = ins.arc_pieces.find(key(v, refined.to(g)));
-      if (it == ins.arc_pieces.end()) continue;
-      const CellFrame::Along* along = frames[cell].find(it->second.edge);
-      const double t = closest_fractions(v, refined.to(g), it->second.edge);
-      if (!along || t < 0) break;
-      return frames[cell].local(*along, t, x);
-    }
-    fail("a trace point of cell " + std::to_string(cell) + " lies on none of its sides");
-  };
-  std::vector<Vec2> local_uv(3 * static_cast<size_t>(nf));
-  std::vector<int> inner(nv, -1), vertex_cell(nv, -1);
-  int num_inner = 0;
+// v's fraction on `edge` nearest w's (-1 where either is not on it).
+double CellMapper::closest_fraction(int v, int w, int edge) const {
+  double best = -1, gap = 2;
+  for (const auto& [ev, tv] : ins_.arcs[v])
+    for (const auto& [ew, tw] : ins_.arcs[w])
+      if (ev == edge && ew == edge && std::abs(tv - tw) < gap) best = tv, gap = std::abs(tv - tw);
+  return best;
+}
+
+// The position of from(h) in the rectangle of the cell of face h / 3.
+Vec2 CellMapper::wedge_position(int h) const {
+  const TriMesh& refined = map_.mesh;
+  const int v = refined.from(h), cell = map_.face_cell[h / 3];
+  for (int g = h, step = 0; g >= 0 && step < 4096; g = refined.rotate_cw(g), ++step) {
+    const auto it = ins_.arc_pieces.find(key(v, refined.to(g)));
+    if (it == ins_.arc_pieces.end()) continue;
+    const CellFrame::Along* along = frames_[cell].find(it->second.edge);
+    const double t = closest_fraction(v, refined.to(g), it->second.edge);
+    if (!along || t < 0) break;
+    return frames_[cell].local(*along, t, x_);
+  }
+  fail("a trace point of cell " + std::to_string(cell) + " lies on none of its sides");
+}
+
+// 3. Trace points on their rectangles' boundaries, per wedge (a cell can touch a node twice);
+//    the other points numbered as the Tutte embedding's unknowns.
+void CellMapper::place_trace_points() {
+  const TriMesh& refined = map_.mesh;
+  const int nv = refined.num_vertices(), nf = refined.num_faces();
+  local_uv_.resize(3 * static_cast<size_t>(nf));
+  inner_.assign(nv, -1);
+  std::vector<int> vertex_cell(nv, -1);
   for (int t = 0; t < nf; ++t)
     for (int k = 0; k < 3; ++k) {
       const int v = refined.F(t, k);
-      if (!ins.arcs[v].empty()) {
-        local_uv[3 * t + k] = wedge_position(3 * t + k);
+      if (!ins_.arcs[v].empty()) {
+        local_uv_[3 * t + k] = wedge_position(3 * t + k);
         continue;
       }
-      if (inner[v] >= 0) continue;
+      if (inner_[v] >= 0) continue;
       if (refined.opposite[refined.vertex_halfedge[v]] < 0) fail("a boundary vertex lies on no trace");
-      inner[v] = num_inner++;
-      vertex_cell[v] = map.face_cell[t];
+      inner_[v] = num_inner_++;
+      vertex_cell[v] = map_.face_cell[t];
     }
+}
+
+// The Tutte embedding of the inner points (rows of inner_), uniform weights where asked.
+std::vector<Vec2> CellMapper::solve_tutte(const std::vector<char>& uniform) const {
+  const TriMesh& refined = map_.mesh;
+  const int nv = refined.num_vertices();
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_inner_, 2);
+  for (int v = 0; v < nv; ++v) {
+    if (inner_[v] < 0) continue;
+    const int row = inner_[v];
+    double total = 0;
+    for (const auto& [h, w] : tutte_weights(refined, v, uniform[v])) {
+      const int j = refined.to(h);
+      total += w;
+      if (inner_[j] >= 0)
+        entries.emplace_back(row, inner_[j], -w);
+      else
+        rhs.row(row) += w * local_uv_[TriMesh::next(h)].transpose();
+    }
+    entries.emplace_back(row, row, total);
+  }
+  Eigen::SparseMatrix<double> A(num_inner_, num_inner_);
+  A.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
+  solver.compute(A);
+  if (solver.info() != Eigen::Success) fail("the Tutte system could not be factorized");
+  const Eigen::MatrixXd solution = solver.solve(rhs);
+  if (solver.info() != Eigen::Success || !solution.allFinite()) fail("the Tutte system could not be solved");
+  std::vector<Vec2> at(num_inner_);
+  for (int v = 0; v < nv; ++v)
+    if (inner_[v] >= 0) at[inner_[v]] = solution.row(inner_[v]).transpose();
+  return at;
+}
+
+// Marks for uniform weights the inner vertices of every flipped triangle and their inner
+// neighbours; returns how many were newly marked.
+int CellMapper::mark_uniform_around_flips(std::vector<char>& uniform) const {
+  const TriMesh& refined = map_.mesh;
+  int marked = 0;
+  for (int t = 0; t < refined.num_faces(); ++t) {
+    const Vec2 a = local_uv_[3 * t + 1] - local_uv_[3 * t], b = local_uv_[3 * t + 2] - local_uv_[3 * t];
+    if (!(a.x() * b.y() - a.y() * b.x() < 0)) continue;
+    for (int k = 0; k < 3; ++k)  // the flipped triangle's inner vertices and their inner neighbours
+      if (inner_[refined.F(t, k)] >= 0)
+        for (int h : outgoing_halfedges(refined, refined.F(t, k)))
+          for (int v : {refined.from(h), refined.to(h)})
+            if (inner_[v] >= 0 && !uniform[v]) uniform[v] = 1, ++marked;
+  }
+  return marked;
+}
+
+// Inner points by the Tutte embedding, into local_uv_.
+void CellMapper::embed_inner_points() {
+  const TriMesh& refined = map_.mesh;
   // Mean-value weights first; where rounding flips sliver triangles, uniform weights around them.
-  std::vector<char> uniform(nv, 0);
-  for (int round = 0; num_inner > 0; ++round) {
-    progress.check_cancel();
-    std::vector<Eigen::Triplet<double>> entries;
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_inner, 2);
-    for (int v = 0; v < nv; ++v) {
-      if (inner[v] < 0) continue;
-      const int row = inner[v];
-      double total = 0;
-      for (const auto& [h, w] : tutte_weights(refined, v, uniform[v])) {
-        const int j = refined.to(h);
-        total += w;
-        if (inner[j] >= 0)
-          entries.emplace_back(row, inner[j], -w);
-        else
-          rhs.row(row) += w * local_uv[TriMesh::next(h)].transpose();
-      }
-      entries.emplace_back(row, row, total);
-    }
-    Eigen::SparseMatrix<double> A(num_inner, num_inner);
-    A.setFromTriplets(entries.begin(), entries.end());
-    Eigen::SparseLU<Eigen::SparseMatrix<double>> solver;
-    solver.compute(A);
-    if (solver.info() != Eigen::Success) fail("the Tutte system could not be factorized");
-    const Eigen::MatrixXd solution = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !solution.allFinite()) fail("the Tutte system could not be solved");
-    std::vector<Vec2> at(num_inner);
-    for (int v = 0; v < nv; ++v)
-      if (inner[v] >= 0) at[inner[v]] = solution.row(inner[v]).transpose();
-    snap_degenerate_stars(refined, inner, local_uv, at);
-    for (int t = 0; t < nf; ++t)
+  std::vector<char> uniform(refined.num_vertices(), 0);
+  for (int round = 0; num_inner_ > 0; ++round) {
+    progress_.check_cancel();
+    std::vector<Vec2> at = solve_tutte(uniform);
+    snap_degenerate_stars(refined, inner_, local_uv_, at);
+    for (int t = 0; t < refined.num_faces(); ++t)
       for (int k = 0; k < 3; ++k)
-        if (inner[refined.F(t, k)] >= 0) local_uv[3 * t + k] = at[inner[refined.F(t, k)]];
-    int marked = 0;
-    for (int t = 0; t < nf && round < 4; ++t) {
-      const Vec2 a = local_uv[3 * t + 1] - local_uv[3 * t], b = local_uv[3 * t + 2] - local_uv[3 * t];
-      if (!(a.x() * b.y() - a.y() * b.x() < 0)) continue;
-      for (int k = 0; k < 3; ++k)  // the flipped triangle's inner vertices and their inner neighbours
-        if (inner[refined.F(t, k)] >= 0)
-          for (int h : outgoing_halfedges(refined, refined.F(t, k)))
-            for (int v : {refined.from(h), refined.to(h)})
-              if (inner[v] >= 0 && !uniform[v]) uniform[v] = 1, ++marked;
-    }
+        if (inner_[refined.F(t, k)] >= 0) local_uv_[3 * t + k] = at[inner_[refined.F(t, k)]];
+    const int marked = round < 4 ? mark_uniform_around_flips(uniform) : 0;
     if (marked == 0) break;
   }
+}
 
-  // 4. Corners in the glued layout (exact_map below gives each vertex one uv per chart).
-  glue_cells(tmesh, x, frames);
-  map.corner_uv.resize(3 * static_cast<size_t>(nf));
+// 4. Corners in the glued layout (exact_map gives each vertex one uv per chart).
+void CellMapper::glue_rectangles() {
+  glue_cells(tmesh_, x_, frames_);
+  const int nf = map_.mesh.num_faces();
+  map_.corner_uv.resize(3 * static_cast<size_t>(nf));
   for (int t = 0; t < nf; ++t)
-    for (int k = 0; k < 3; ++k) map.corner_uv[3 * t + k] = frames[map.face_cell[t]].global(local_uv[3 * t + k]);
+    for (int k = 0; k < 3; ++k) map_.corner_uv[3 * t + k] = frames_[map_.face_cell[t]].global(local_uv_[3 * t + k]);
+}
 
-  // 5. Exact, and degenerate triangles opened where single moves can.
-  map.param = exact_map(refined, map.corner_uv, options.fraction_bits);
+// The cone angles of the refined mesh's vertices (inserted points regular), or empty.
+std::vector<int> CellMapper::refined_cone_turns() const {
+  const TriMesh& refined = map_.mesh;
   std::vector<int> cone_turns;
-  if (!options.cone_turns.empty()) {
-    if (static_cast<int>(options.cone_turns.size()) != mesh.num_vertices())
+  if (!options_.cone_turns.empty()) {
+    if (static_cast<int>(options_.cone_turns.size()) != mesh_.num_vertices())
       throw Error(ErrorCode::InvalidArgument, "fallback cell map: the cone angles do not match the mesh");
-    cone_turns = options.cone_turns;
-    for (int v = mesh.num_vertices(); v < nv; ++v)
+    cone_turns = options_.cone_turns;
+    for (int v = mesh_.num_vertices(); v < refined.num_vertices(); ++v)
       cone_turns.push_back(refined.opposite[refined.vertex_halfedge[v]] < 0 ? 2 : 4);
   }
+  return cone_turns;
+}
+
+// Degenerate triangles opened (and rounding flips unfolded) where single moves can.
+void CellMapper::open_degenerate_triangles(const std::vector<int>& cone_turns) {
+  const TriMesh& refined = map_.mesh;
   // Rounding can flip a sliver: the same moves unfold it (also when no opening was asked for).
   int rounding_flips = 0;
-  for (int t = 0; t < nf; ++t)
-    rounding_flips += orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]) < 0;
-  if (options.open_degenerate || rounding_flips > 0) {
-    std::vector<char> pinned(nv, 0);
-    for (size_t n = 0; n < tmesh.nodes.size(); ++n)
-      if (tmesh.nodes[n].kind != TMeshNode::Kind::TJunction && tmesh.nodes[n].kind != TMeshNode::Kind::Crossing)
-        pinned[ins.node_point[n]] = 1;
-    std::vector<IsolineConstraint> isolines;
-    for (int h = 0; h < refined.num_halfedges(); ++h) {
-      const int o = refined.opposite[h];
-      if (o >= 0 && o < h) continue;
-      const auto it = ins.arc_pieces.find(key(refined.from(h), refined.to(h)));
-      if (it == ins.arc_pieces.end() || !tmesh.edges[it->second.edge].on_feature) continue;
-      const IVec2 &a = map.param.uv[h], &b = map.param.uv[TriMesh::next(h)];
-      if (a[0] == b[0]) isolines.push_back({h, 0});
-      else if (a[1] == b[1]) isolines.push_back({h, 1});
-    }
-    MapUntangleOptions untangle;
-    untangle.never_flip = true;
-    untangle.cone_turns = cone_turns;
-    const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map.param, progress, untangle);
-    map.stats.degenerate_before_opening = opened.degenerate_before;
-    map.stats.flipped_before_opening = opened.flipped_before;
-    map.stats.opened_vertices = opened.moved_vertices;
+  for (int t = 0; t < refined.num_faces(); ++t)
+    rounding_flips += orient2d_exact(map_.param.uv[3 * t], map_.param.uv[3 * t + 1], map_.param.uv[3 * t + 2]) < 0;
+  if (!(options_.open_degenerate || rounding_flips > 0)) return;
+  std::vector<char> pinned(refined.num_vertices(), 0);
+  for (size_t n = 0; n < tmesh_.nodes.size(); ++n)
+    if (tmesh_.nodes[n].kind != TMeshNode::Kind::TJunction && tmesh_.nodes[n].kind != TMeshNode::Kind::Crossing)
+      pinned[ins_.node_point[n]] = 1;
+  std::vector<IsolineConstraint> isolines;
+  for (int h = 0; h < refined.num_halfedges(); ++h) {
+    const int o = refined.opposite[h];
+    if (o >= 0 && o < h) continue;
+    const auto it = ins_.arc_pieces.find(key(refined.from(h), refined.to(h)));
+    if (it == ins_.arc_pieces.end() || !tmesh_.edges[it->second.edge].on_feature) continue;
+    const IVec2 &a = map_.param.uv[h], &b = map_.param.uv[TriMesh::next(h)];
+    if (a[0] == b[0]) isolines.push_back({h, 0});
+    else if (a[1] == b[1]) isolines.push_back({h, 1});
   }
-  for (int t = 0; t < nf; ++t) {
+  MapUntangleOptions untangle;
+  untangle.never_flip = true;
+  untangle.cone_turns = cone_turns;
+  const MapUntangleStats opened = untangle_map(refined, pinned, isolines, map_.param, progress_, untangle);
+  map_.stats.degenerate_before_opening = opened.degenerate_before;
+  map_.stats.flipped_before_opening = opened.flipped_before;
+  map_.stats.opened_vertices = opened.moved_vertices;
+}
+
+// corner_uv from the exact map, and its flipped, degenerate and collapsed triangles counted.
+void CellMapper::count_triangles() {
+  for (int t = 0; t < map_.mesh.num_faces(); ++t) {
     for (int k = 0; k < 3; ++k)
-      map.corner_uv[3 * t + k] = Vec2(map.param.to_double(map.param.uv[3 * t + k][0]), map.param.to_double(map.param.uv[3 * t + k][1]));
-    const int sign = orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]);
-    map.stats.flipped_triangles += sign < 0;
-    map.stats.degenerate_triangles += sign == 0;
-    const CellFrame& frame = frames[map.face_cell[t]];
-    map.stats.collapsed_cell_triangles += sign == 0 && (frame.width == 0 || frame.height == 0);
+      map_.corner_uv[3 * t + k] = Vec2(map_.param.to_double(map_.param.uv[3 * t + k][0]), map_.param.to_double(map_.param.uv[3 * t + k][1]));
+    const int sign = orient2d_exact(map_.param.uv[3 * t], map_.param.uv[3 * t + 1], map_.param.uv[3 * t + 2]);
+    map_.stats.flipped_triangles += sign < 0;
+    map_.stats.degenerate_triangles += sign == 0;
+    const CellFrame& frame = frames_[map_.face_cell[t]];
+    map_.stats.collapsed_cell_triangles += sign == 0 && (frame.width == 0 || frame.height == 0);
   }
-  if (!cone_turns.empty()) {  // rings wound other than their cone where every triangle is positive
-    const std::vector<int> turns = exact_angle_sums(refined, map.param);
-    std::vector<char> positive(nv, 1);
-    for (int t = 0; t < nf; ++t)
-      if (orient2d_exact(map.param.uv[3 * t], map.param.uv[3 * t + 1], map.param.uv[3 * t + 2]) <= 0)
-        for (int k = 0; k < 3; ++k) positive[refined.F(t, k)] = 0;
-    for (int v = 0; v < nv; ++v) map.stats.wound_vertices += positive[v] && turns[v] != cone_turns[v];
-  }
-  map.stats.vertices = nv;
-  map.stats.faces = nf;
-  map.stats.inner_vertices = num_inner;
+}
+
+// Counts the rings wound other than their cone where every triangle is positive (cone angles given).
+void CellMapper::count_wound_vertices(const std::vector<int>& cone_turns) {
+  if (cone_turns.empty()) return;
+  const TriMesh& refined = map_.mesh;
+  const std::vector<int> turns = exact_angle_sums(refined, map_.param);
+  std::vector<char> positive(refined.num_vertices(), 1);
+  for (int t = 0; t < refined.num_faces(); ++t)
+    if (orient2d_exact(map_.param.uv[3 * t], map_.param.uv[3 * t + 1], map_.param.uv[3 * t + 2]) <= 0)
+      for (int k = 0; k < 3; ++k) positive[refined.F(t, k)] = 0;
+  for (int v = 0; v < refined.num_vertices(); ++v) map_.stats.wound_vertices += positive[v] && turns[v] != cone_turns[v];
+}
+
+}  // namespace
+
+CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const std::vector<int64_t>& x,
+                                Progress& progress, const CellMapOptions& options) {
+  Timer timer;
+  check_cell_map_inputs(mesh, tmesh, x);
+  CellMap map = CellMapper(mesh, tmesh, x, progress, options).run();
   map.stats.seconds = timer.seconds();
   return map;
 }

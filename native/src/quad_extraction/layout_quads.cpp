@@ -154,215 +154,314 @@ std::array<OrientedSide, 4> orient_cell(const TMesh& tm, int c) {
   return sides;
 }
 
+// A point of a side, in the side's direction: its id, where it lies in the map, the side's
+// direction there, and its parametric distance from the side's first corner.
+struct SidePoint {
+  int64_t id;
+  const GridPoint* at;
+  Vec2 along;
+  double distance;
+};
+
+// One cell as a w x h grid: the points of its four sides, their parametric lengths, and the id of
+// its first inner point.
+struct CellGrid {
+  std::array<std::vector<SidePoint>, 4> side;
+  std::array<double, 4> length{0, 0, 0, 0};
+  int64_t w = 0, h = 0;
+  int64_t inner_first = 0;
+
+  // Grid point (i, j): side 0 runs along i at j = 0, side 1 up at i = w, side 2 back at j = h,
+  // side 3 down at i = 0.
+  const SidePoint& boundary(int64_t i, int64_t j) const {
+    if (j == 0) return side[0][i];
+    if (i == w) return side[1][j];
+    if (j == h) return side[2][w - i];
+    return side[3][h - j];
+  }
+  // The id of grid point (i, j): its side point's, or one of the cell's inner points.
+  int64_t id(int64_t i, int64_t j) const {
+    return (i == 0 || j == 0 || i == w || j == h) ? boundary(i, j).id : inner_first + (j - 1) * (w - 1) + (i - 1);
+  }
+};
+
+// The state of one layout extraction: the grid points (nodes, edges' inner points, cells' inner
+// points), their identifications by collapses, and the quads.
+class LayoutQuadExtractor {
+ public:
+  LayoutQuadExtractor(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
+                      const std::vector<int64_t>& x, Progress& progress, bool with_positions)
+      : mesh_(mesh), seamless_(seamless), tm_(tm), x_(x), progress_(progress), with_positions_(with_positions),
+        ne_(static_cast<int>(tm.edges.size())) {}
+
+  // All the phases; the layout without its time.
+  LayoutQuads run();
+
+ private:
+  void number_grid_points();
+  int64_t edge_point(int e, int64_t k) const;
+  void place_node_and_edge_points();
+  CellGrid cell_sides(int c);
+  void make_cell_quads(int c);
+  void glue_collapsed_cell(const CellGrid& g);
+  void place_inner_points(const CellGrid& g);
+  void merge_points();
+  void build_quad_mesh();
+  void project_onto_surface();
+
+  static constexpr int64_t kMaxQuads = 50000000;
+
+  const TriMesh& mesh_;
+  const ExactParametrization& seamless_;
+  const TMesh& tm_;
+  const std::vector<int64_t>& x_;
+  Progress& progress_;
+  const bool with_positions_;
+  const int ne_;
+  LayoutQuads result_;
+  std::vector<int64_t> edge_first_;             // #edges: the id of each edge's first inner point
+  int64_t count_ = 0;                           // nodes and edges' inner points
+  std::vector<GridPoint> points_;               // by id
+  std::vector<std::vector<GridPoint>> on_edge_;  // the x + 1 points of each edge, from -> to
+  UnionFind<int64_t> uf_;                       // points identified by collapses
+  std::vector<std::array<int64_t, 4>> quads_;   // point ids
+  std::vector<int> vertex_of_;                  // by id: the merged point
+  std::vector<GridPoint> merged_;
+};
+
+LayoutQuads LayoutQuadExtractor::run() {
+  number_grid_points();
+  place_node_and_edge_points();
+  // Cells: side point lists, collapses, inner points, quads.
+  uf_.grow(count_);
+  for (int e = 0; e < ne_; ++e)
+    if (x_[e] == 0) uf_.unite(tm_.edges[e].from, tm_.edges[e].to);
+  for (int c = 0; c < static_cast<int>(tm_.cells.size()); ++c) make_cell_quads(c);
+  progress_.update(0.4);
+  merge_points();
+  build_quad_mesh();
+  project_onto_surface();
+  QuadMesh& out = result_.quads;
+  out.quad_face.resize(out.num_quads());
+  for (int q = 0; q < out.num_quads(); ++q) out.quad_face[q] = out.vertex_face[out.Q(q, 0)];
+  return std::move(result_);
+}
+
+// Grid point ids: nodes, then the inner points of every edge, then the cells' inner points.
+void LayoutQuadExtractor::number_grid_points() {
+  edge_first_.resize(ne_);
+  count_ = static_cast<int64_t>(tm_.nodes.size());
+  for (int e = 0; e < ne_; ++e) {
+    if (x_[e] < 0) throw Error(ErrorCode::InvalidArgument, "layout quads: negative length of T-edge " + std::to_string(e));
+    edge_first_[e] = count_;
+    count_ += std::max<int64_t>(0, x_[e] - 1);
+    result_.stats.zero_edges += x_[e] == 0;
+  }
+}
+
+// The id of point k of edge e (from -> to).
+int64_t LayoutQuadExtractor::edge_point(int e, int64_t k) const {
+  if (k == 0) return tm_.edges[e].from;
+  if (k == x_[e]) return tm_.edges[e].to;
+  return edge_first_[e] + k - 1;
+}
+
+// The nodes' points and the points along every edge (zero where positions are not asked for).
+void LayoutQuadExtractor::place_node_and_edge_points() {
+  points_.resize(count_);
+  for (size_t n = 0; n < tm_.nodes.size(); ++n) {
+    const TMeshNode& node = tm_.nodes[n];
+    points_[n].position = node.point.position(mesh_);
+    points_[n].singular = node.singular();
+    points_[n].point = node.point;
+  }
+  on_edge_.resize(ne_);
+  for (int e = 0; e < ne_; ++e) {
+    if (!with_positions_) {
+      on_edge_[e].assign(x_[e] + 1, GridPoint{});
+      continue;
+    }
+    place_edge_points(mesh_, tm_, e, x_[e], on_edge_[e]);
+    for (int64_t k = 1; k < x_[e]; ++k) points_[edge_point(e, k)] = on_edge_[e][k];
+    if (e % 256 == 0) progress_.check_cancel();
+  }
+}
+
+// Cell c's side point lists and lengths; throws where the cell is no rectangle of the grid.
+CellGrid LayoutQuadExtractor::cell_sides(int c) {
+  if (!tm_.cells[c].four_sided)
+    throw Error(ErrorCode::InvalidArgument, "layout quads: T-mesh cell " + std::to_string(c) + " is not four-sided");
+  const std::array<OrientedSide, 4> sides = orient_cell(tm_, c);
+  CellGrid g;
+  for (int s = 0; s < 4; ++s) {
+    for (size_t i = 0; i < sides[s].edges.size(); ++i) {
+      const int e = sides[s].edges[i];
+      const bool forward = sides[s].forward[i];
+      for (int64_t k = (i == 0 ? 0 : 1); k <= x_[e]; ++k) {
+        const int64_t kk = forward ? k : x_[e] - k;
+        const GridPoint& p = on_edge_[e][kk];
+        const double fraction = x_[e] > 0 ? static_cast<double>(k) / static_cast<double>(x_[e]) : 0.0;
+        g.side[s].push_back({edge_point(e, kk), &p, forward ? p.along : Vec2(-p.along), g.length[s] + fraction * tm_.edges[e].length});
+      }
+      g.length[s] += tm_.edges[e].length;
+    }
+    if (g.side[s].empty()) throw Error(ErrorCode::InvalidArgument, "layout quads: cell " + std::to_string(c) + " has an empty side");
+  }
+  g.w = static_cast<int64_t>(g.side[0].size()) - 1, g.h = static_cast<int64_t>(g.side[1].size()) - 1;
+  if (static_cast<int64_t>(g.side[2].size()) - 1 != g.w || static_cast<int64_t>(g.side[3].size()) - 1 != g.h)
+    throw Error(ErrorCode::InvalidArgument, "layout quads: opposite sides of cell " + std::to_string(c) +
+                                                " have different integer lengths (Ax != 0)");
+  for (int s = 0; s < 4; ++s)
+    if (uf_.find(g.side[s].back().id) != uf_.find(g.side[(s + 1) % 4].front().id))
+      throw Error(ErrorCode::InvalidArgument, "layout quads: the sides of cell " + std::to_string(c) + " do not meet");
+  return g;
+}
+
+// Cell c as a grid of quads, or glued shut where it has zero width or height.
+void LayoutQuadExtractor::make_cell_quads(int c) {
+  CellGrid g = cell_sides(c);
+  const int64_t w = g.w, h = g.h;
+  if (w == 0 || h == 0) {
+    glue_collapsed_cell(g);
+    return;
+  }
+  result_.stats.quads += w * h;
+  if (result_.stats.quads > kMaxQuads)
+    throw Error(ErrorCode::InvalidArgument, "layout quads: more than " + std::to_string(kMaxQuads) + " quads");
+  g.inner_first = static_cast<int64_t>(points_.size());
+  points_.resize(points_.size() + (w - 1) * (h - 1));
+  uf_.grow(static_cast<int64_t>(points_.size()));
+  if (with_positions_) place_inner_points(g);
+  for (int64_t j = 0; j < h; ++j)
+    for (int64_t i = 0; i < w; ++i) {
+      quads_.push_back({g.id(i, j), g.id(i + 1, j), g.id(i + 1, j + 1), g.id(i, j + 1)});
+      result_.quad_cell.push_back(c);
+    }
+  if (c % 64 == 0) progress_.check_cancel();
+}
+
+// A cell of zero width or height: its opposite sides' points identified.
+void LayoutQuadExtractor::glue_collapsed_cell(const CellGrid& g) {
+  const int64_t w = g.w, h = g.h;
+  ++result_.stats.collapsed_cells;
+  if (w == 0)  // glue (w, j) to (0, j)
+    for (int64_t j = 0; j <= h; ++j) uf_.unite(g.side[1][j].id, g.side[3][h - j].id);
+  if (h == 0)  // glue (i, 0) to (i, h)
+    for (int64_t i = 0; i <= w; ++i) uf_.unite(g.side[0][i].id, g.side[2][w - i].id);
+}
+
+// The inner points of a cell, walked to in the map (or by the Coons patch of its sides).
+void LayoutQuadExtractor::place_inner_points(const CellGrid& g) {
+  const int64_t w = g.w, h = g.h;
+  const auto& side = g.side;
+  const auto& length = g.length;
+  // Inner points: the cell is the rectangle [0, W] x [0, H] of the map. Sides in normalized
+  // parametric position: bottom b(i), top t(i) (from the left), left l(j), right r(j) (from the
+  // bottom). (i, j) -> v = ((1 - s) l(j) + s r(j)) H with s = i / w, u = (b(i) + (t(i) - b(i)) v / H) W:
+  // monotone in j for each column and in i for each height, so grid lines never cross. The point
+  // is found by walking there from the bottom point (i, 0).
+  const double W = 0.5 * (length[0] + length[2]), H = 0.5 * (length[1] + length[3]);
+  auto normalized = [](double d, double total) { return total > 0 ? d / total : 0.0; };
+  auto pos = [&](int64_t i, int64_t j) { return points_[g.boundary(i, j).id].position; };
+  for (int64_t j = 1; j < h; ++j)
+    for (int64_t i = 1; i < w; ++i) {
+      const double s = static_cast<double>(i) / w, t = static_cast<double>(j) / h;
+      GridPoint& p = points_[g.id(i, j)];
+      const SidePoint& bottom = side[0][i];
+      const double bi = normalized(bottom.distance, length[0]);
+      const double ti = 1 - normalized(side[2][w - i].distance, length[2]);
+      const double lj = 1 - normalized(side[3][h - j].distance, length[3]);
+      const double rj = normalized(side[1][j].distance, length[1]);
+      const double v = ((1 - s) * lj + s * rj) * H;
+      const double du = (ti - bi) * W * (H > 0 ? v / H : 0.0);
+      const Vec2 up(-bottom.along.y(), bottom.along.x());
+      SurfacePoint found;
+      if (bottom.at->point.face >= 0 && bottom.along != Vec2::Zero() &&
+          walk(mesh_, seamless_, bottom.at->point, v * up + du * bottom.along, found)) {
+        p.point = found;
+        p.position = found.position(mesh_);
+        continue;
+      }
+      // No usable start: the Coons patch of the sides, projected onto the surface later.
+      ++result_.stats.walk_failures;
+      p.position = (1 - t) * pos(i, 0) + t * pos(i, h) + (1 - s) * pos(0, j) + s * pos(w, j) -
+                   ((1 - s) * (1 - t) * pos(0, 0) + s * (1 - t) * pos(w, 0) + (1 - s) * t * pos(0, h) +
+                    s * t * pos(w, h));
+    }
+}
+
+// Merge identified points (their positions averaged; singular if any member is).
+void LayoutQuadExtractor::merge_points() {
+  const int64_t total = static_cast<int64_t>(points_.size());
+  vertex_of_.assign(total, -1);
+  std::vector<int> members;
+  for (int64_t p = 0; p < total; ++p) {
+    const int64_t r = uf_.find(p);
+    if (vertex_of_[r] < 0) {
+      vertex_of_[r] = static_cast<int>(merged_.size());
+      merged_.push_back(points_[p]);
+      merged_.back().position = Vec3::Zero();
+      merged_.back().singular = false;
+      members.push_back(0);
+    }
+    const int v = vertex_of_[p] = vertex_of_[r];
+    GridPoint& m = merged_[v];
+    m.position += points_[p].position;
+    m.singular = m.singular || points_[p].singular;
+    ++members[v];
+  }
+  result_.stats.merged_points = static_cast<int>(total - static_cast<int64_t>(merged_.size()));
+  for (size_t v = 0; v < merged_.size(); ++v) {
+    merged_[v].position /= members[v];
+    if (members[v] > 1) merged_[v].point.face = -1;  // an average: project it
+  }
+}
+
+// The quad mesh of the merged points the quads use.
+void LayoutQuadExtractor::build_quad_mesh() {
+  // Unused points (e.g. the nodes of a component without cells) are dropped.
+  std::vector<int> used(merged_.size(), -1);
+  int nv = 0;
+  for (const auto& q : quads_)
+    for (int64_t p : q)
+      if (used[vertex_of_[p]] < 0) used[vertex_of_[p]] = nv++;
+  QuadMesh& out = result_.quads;
+  out.V.resize(nv, 3);
+  out.Q.resize(static_cast<int>(quads_.size()), 4);
+  out.vertex_face.assign(nv, -1);
+  out.vertex_singular.assign(nv, 0);
+  for (size_t v = 0; v < merged_.size(); ++v) {
+    if (used[v] < 0) continue;
+    out.V.row(used[v]) = merged_[v].position.transpose();
+    out.vertex_face[used[v]] = merged_[v].point.face;
+    out.vertex_singular[used[v]] = merged_[v].singular;
+  }
+  for (size_t q = 0; q < quads_.size(); ++q)
+    for (int k = 0; k < 4; ++k) out.Q(static_cast<int>(q), k) = used[vertex_of_[quads_[q][k]]];
+}
+
+// Points placed by the Coons fallback or averaged by a collapse: onto the surface.
+void LayoutQuadExtractor::project_onto_surface() {
+  if (!with_positions_) return;
+  QuadMesh& out = result_.quads;
+  const TriangleBvh bvh(mesh_);
+  for (int v = 0; v < out.V.rows(); ++v) {
+    if (out.vertex_face[v] >= 0) continue;
+    const TriangleBvh::Hit hit = bvh.closest_point(out.V.row(v).transpose());
+    if (hit.triangle < 0) continue;
+    out.V.row(v) = hit.point.transpose();
+    out.vertex_face[v] = hit.triangle;
+  }
+}
+
 }  // namespace
 
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
                                  const std::vector<int64_t>& x, Progress& progress, bool with_positions) {
   Timer timer;
-  const int ne = static_cast<int>(tm.edges.size());
-  if (static_cast<int>(x.size()) != ne)
+  if (static_cast<int>(x.size()) != static_cast<int>(tm.edges.size()))
     throw Error(ErrorCode::InvalidArgument, "layout quads: x must have one length per T-edge");
-  LayoutQuads result;
-
-  // Grid point ids: nodes, then the inner points of every edge, then the cells' inner points.
-  std::vector<int64_t> edge_first(ne);
-  int64_t count = static_cast<int64_t>(tm.nodes.size());
-  for (int e = 0; e < ne; ++e) {
-    if (x[e] < 0) throw Error(ErrorCode::InvalidArgument, "layout quads: negative length of T-edge " + std::to_string(e));
-    edge_first[e] = count;
-    count += std::max<int64_t>(0, x[e] - 1);
-    result.stats.zero_edges += x[e] == 0;
-  }
-  auto edge_point = [&](int e, int64_t k) -> int64_t {
-    if (k == 0) return tm.edges[e].from;
-    if (k == x[e]) return tm.edges[e].to;
-    return edge_first[e] + k - 1;
-  };
-  std::vector<GridPoint> points(count);
-  for (size_t n = 0; n < tm.nodes.size(); ++n) {
-    const TMeshNode& node = tm.nodes[n];
-    points[n].position = node.point.position(mesh);
-    points[n].singular = node.singular();
-    points[n].point = node.point;
-  }
-  std::vector<std::vector<GridPoint>> on_edge(ne);  // the x + 1 points of each edge, from -> to
-  for (int e = 0; e < ne; ++e) {
-    if (!with_positions) {
-      on_edge[e].assign(x[e] + 1, GridPoint{});
-      continue;
-    }
-    place_edge_points(mesh, tm, e, x[e], on_edge[e]);
-    for (int64_t k = 1; k < x[e]; ++k) points[edge_point(e, k)] = on_edge[e][k];
-    if (e % 256 == 0) progress.check_cancel();
-  }
-
-  // Cells: side point lists, collapses, inner points, quads.
-  UnionFind<int64_t> uf(count);
-  for (int e = 0; e < ne; ++e)
-    if (x[e] == 0) uf.unite(tm.edges[e].from, tm.edges[e].to);
-  std::vector<std::array<int64_t, 4>> quads;
-  const int64_t max_quads = 50000000;
-  // A point of a side, in the side's direction: its id, where it lies in the map, the side's
-  // direction there, and its parametric distance from the side's first corner.
-  struct SidePoint {
-    int64_t id;
-    const GridPoint* at;
-    Vec2 along;
-    double distance;
-  };
-  for (int c = 0; c < static_cast<int>(tm.cells.size()); ++c) {
-    if (!tm.cells[c].four_sided)
-      throw Error(ErrorCode::InvalidArgument, "layout quads: T-mesh cell " + std::to_string(c) + " is not four-sided");
-    const std::array<OrientedSide, 4> sides = orient_cell(tm, c);
-    std::array<std::vector<SidePoint>, 4> side;
-    std::array<double, 4> length{0, 0, 0, 0};
-    for (int s = 0; s < 4; ++s) {
-      for (size_t i = 0; i < sides[s].edges.size(); ++i) {
-        const int e = sides[s].edges[i];
-        const bool forward = sides[s].forward[i];
-        for (int64_t k = (i == 0 ? 0 : 1); k <= x[e]; ++k) {
-          const int64_t kk = forward ? k : x[e] - k;
-          const GridPoint& g = on_edge[e][kk];
-          const double fraction = x[e] > 0 ? static_cast<double>(k) / static_cast<double>(x[e]) : 0.0;
-          side[s].push_back({edge_point(e, kk), &g, forward ? g.along : Vec2(-g.along), length[s] + fraction * tm.edges[e].length});
-        }
-        length[s] += tm.edges[e].length;
-      }
-      if (side[s].empty()) throw Error(ErrorCode::InvalidArgument, "layout quads: cell " + std::to_string(c) + " has an empty side");
-    }
-    const int64_t w = static_cast<int64_t>(side[0].size()) - 1, h = static_cast<int64_t>(side[1].size()) - 1;
-    if (static_cast<int64_t>(side[2].size()) - 1 != w || static_cast<int64_t>(side[3].size()) - 1 != h)
-      throw Error(ErrorCode::InvalidArgument, "layout quads: opposite sides of cell " + std::to_string(c) +
-                                                  " have different integer lengths (Ax != 0)");
-    for (int s = 0; s < 4; ++s)
-      if (uf.find(side[s].back().id) != uf.find(side[(s + 1) % 4].front().id))
-        throw Error(ErrorCode::InvalidArgument, "layout quads: the sides of cell " + std::to_string(c) + " do not meet");
-    // Grid point (i, j): side 0 runs along i at j = 0, side 1 up at i = w, side 2 back at j = h,
-    // side 3 down at i = 0.
-    auto boundary = [&](int64_t i, int64_t j) -> const SidePoint& {
-      if (j == 0) return side[0][i];
-      if (i == w) return side[1][j];
-      if (j == h) return side[2][w - i];
-      return side[3][h - j];
-    };
-    if (w == 0 || h == 0) {
-      ++result.stats.collapsed_cells;
-      if (w == 0)  // glue (w, j) to (0, j)
-        for (int64_t j = 0; j <= h; ++j) uf.unite(side[1][j].id, side[3][h - j].id);
-      if (h == 0)  // glue (i, 0) to (i, h)
-        for (int64_t i = 0; i <= w; ++i) uf.unite(side[0][i].id, side[2][w - i].id);
-      continue;
-    }
-    result.stats.quads += w * h;
-    if (result.stats.quads > max_quads)
-      throw Error(ErrorCode::InvalidArgument, "layout quads: more than " + std::to_string(max_quads) + " quads");
-    const int64_t inner_first = static_cast<int64_t>(points.size());
-    points.resize(points.size() + (w - 1) * (h - 1));
-    uf.grow(static_cast<int64_t>(points.size()));
-    auto id = [&](int64_t i, int64_t j) {
-      return (i == 0 || j == 0 || i == w || j == h) ? boundary(i, j).id : inner_first + (j - 1) * (w - 1) + (i - 1);
-    };
-    // Inner points: the cell is the rectangle [0, W] x [0, H] of the map. Sides in normalized
-    // parametric position: bottom b(i), top t(i) (from the left), left l(j), right r(j) (from the
-    // bottom). (i, j) -> v = ((1 - s) l(j) + s r(j)) H with s = i / w, u = (b(i) + (t(i) - b(i)) v / H) W:
-    // monotone in j for each column and in i for each height, so grid lines never cross. The point
-    // is found by walking there from the bottom point (i, 0).
-    const double W = 0.5 * (length[0] + length[2]), H = 0.5 * (length[1] + length[3]);
-    auto normalized = [](double d, double total) { return total > 0 ? d / total : 0.0; };
-    auto pos = [&](int64_t i, int64_t j) { return points[boundary(i, j).id].position; };
-    for (int64_t j = 1; j < h && with_positions; ++j)
-      for (int64_t i = 1; i < w; ++i) {
-        const double s = static_cast<double>(i) / w, t = static_cast<double>(j) / h;
-        GridPoint& g = points[id(i, j)];
-        const SidePoint& bottom = side[0][i];
-        const double bi = normalized(bottom.distance, length[0]);
-        const double ti = 1 - normalized(side[2][w - i].distance, length[2]);
-        const double lj = 1 - normalized(side[3][h - j].distance, length[3]);
-        const double rj = normalized(side[1][j].distance, length[1]);
-        const double v = ((1 - s) * lj + s * rj) * H;
-        const double du = (ti - bi) * W * (H > 0 ? v / H : 0.0);
-        const Vec2 up(-bottom.along.y(), bottom.along.x());
-        SurfacePoint found;
-        if (bottom.at->point.face >= 0 && bottom.along != Vec2::Zero() &&
-            walk(mesh, seamless, bottom.at->point, v * up + du * bottom.along, found)) {
-          g.point = found;
-          g.position = found.position(mesh);
-          continue;
-        }
-        // No usable start: the Coons patch of the sides, projected onto the surface later.
-        ++result.stats.walk_failures;
-        g.position = (1 - t) * pos(i, 0) + t * pos(i, h) + (1 - s) * pos(0, j) + s * pos(w, j) -
-                     ((1 - s) * (1 - t) * pos(0, 0) + s * (1 - t) * pos(w, 0) + (1 - s) * t * pos(0, h) +
-                      s * t * pos(w, h));
-      }
-    for (int64_t j = 0; j < h; ++j)
-      for (int64_t i = 0; i < w; ++i) {
-        quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
-        result.quad_cell.push_back(c);
-      }
-    if (c % 64 == 0) progress.check_cancel();
-  }
-  progress.update(0.4);
-
-  // Merge identified points (their positions averaged; singular if any member is).
-  const int64_t total = static_cast<int64_t>(points.size());
-  std::vector<int> vertex_of(total, -1);
-  std::vector<GridPoint> merged;
-  std::vector<int> members;
-  for (int64_t p = 0; p < total; ++p) {
-    const int64_t r = uf.find(p);
-    if (vertex_of[r] < 0) {
-      vertex_of[r] = static_cast<int>(merged.size());
-      merged.push_back(points[p]);
-      merged.back().position = Vec3::Zero();
-      merged.back().singular = false;
-      members.push_back(0);
-    }
-    const int v = vertex_of[p] = vertex_of[r];
-    GridPoint& m = merged[v];
-    m.position += points[p].position;
-    m.singular = m.singular || points[p].singular;
-    ++members[v];
-  }
-  result.stats.merged_points = static_cast<int>(total - static_cast<int64_t>(merged.size()));
-  for (size_t v = 0; v < merged.size(); ++v) {
-    merged[v].position /= members[v];
-    if (members[v] > 1) merged[v].point.face = -1;  // an average: project it
-  }
-
-  // Unused points (e.g. the nodes of a component without cells) are dropped.
-  std::vector<int> used(merged.size(), -1);
-  int nv = 0;
-  for (const auto& q : quads)
-    for (int64_t p : q)
-      if (used[vertex_of[p]] < 0) used[vertex_of[p]] = nv++;
-  QuadMesh& out = result.quads;
-  out.V.resize(nv, 3);
-  out.Q.resize(static_cast<int>(quads.size()), 4);
-  out.vertex_face.assign(nv, -1);
-  out.vertex_singular.assign(nv, 0);
-  for (size_t v = 0; v < merged.size(); ++v) {
-    if (used[v] < 0) continue;
-    out.V.row(used[v]) = merged[v].position.transpose();
-    out.vertex_face[used[v]] = merged[v].point.face;
-    out.vertex_singular[used[v]] = merged[v].singular;
-  }
-  for (size_t q = 0; q < quads.size(); ++q)
-    for (int k = 0; k < 4; ++k) out.Q(static_cast<int>(q), k) = used[vertex_of[quads[q][k]]];
-
-  // Points placed by the Coons fallback or averaged by a collapse: onto the surface.
-  if (with_positions) {
-    const TriangleBvh bvh(mesh);
-    for (int v = 0; v < nv; ++v) {
-      if (out.vertex_face[v] >= 0) continue;
-      const TriangleBvh::Hit hit = bvh.closest_point(out.V.row(v).transpose());
-      if (hit.triangle < 0) continue;
-      out.V.row(v) = hit.point.transpose();
-      out.vertex_face[v] = hit.triangle;
-    }
-  }
-  out.quad_face.resize(out.num_quads());
-  for (int q = 0; q < out.num_quads(); ++q) out.quad_face[q] = out.vertex_face[out.Q(q, 0)];
+  LayoutQuads result = LayoutQuadExtractor(mesh, seamless, tm, x, progress, with_positions).run();
   result.stats.seconds = timer.seconds();
   return result;
 }
