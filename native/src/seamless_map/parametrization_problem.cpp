@@ -46,6 +46,11 @@ enum RepairStrategy { kUnfold = 0, kPropagated = 1, kOwnFit = 2, kAllElastic = 3
 
 // Elimination and energy for one constraint mode.
 struct ParametrizationProblem::System {
+  // Eliminates the hard constraints of `problem` and assembles its energy in the free variables
+  // (plus, in Penalty mode, the caller's linear constraints weighted by penalty_weight).
+  System(const ParametrizationProblem& problem, ConstraintMode constraint_mode, double weight, Progress& progress);
+
+  const std::vector<int>& wedge_of;  // the problem's corner -> wedge
   ConstraintMode mode = ConstraintMode::Hard;
   double penalty_weight = 0;
   int num_free = 0;
@@ -62,6 +67,31 @@ struct ParametrizationProblem::System {
   bool factorized = false;
   std::vector<int> var_face_start, var_face;  // free variable -> faces whose corners use it
   std::vector<char> forced_degenerate;        // #F
+
+ private:
+  // Variable (before the elimination) of coordinate `axis` of the wedge of `corner`.
+  int wedge_var(int corner, int axis) const { return 2 * wedge_of[corner] + axis; }
+  // The exact elimination of the hard constraints: pin, transitions, isolines and, in Hard mode,
+  // the caller's linear constraints.
+  LinearElimination eliminate(const ParametrizationProblem& problem) const;
+  // Every wedge coordinate as a form in the free variables (form_*), and the elimination's counts.
+  void expand_forms(LinearElimination& elim, int num_wedges);
+  // True when coordinates va and vb have the same form (are equal by the hard constraints alone).
+  bool same_form(int va, int vb) const;
+  // Marks the faces whose three corners share a coordinate (or two corners coincide) by the hard
+  // constraints alone.
+  void find_forced_degenerate(const ParametrizationProblem& problem);
+  // Q, c and d2 from the least-squares rows of the energy (and of the penalty when with_penalty).
+  void assemble_energy(const ParametrizationProblem& problem, bool with_penalty, Progress& progress);
+  // Appends the energy's least-squares rows (per face and axis the two gradient components,
+  // weighted by sqrt(area)); returns their number.
+  int add_energy_rows(const ParametrizationProblem& problem, std::vector<Triplet>& triplets,
+                      std::vector<double>& rhs, Progress& progress) const;
+  // Appends one penalty row per linear constraint from row `row` on; returns the next row.
+  int add_penalty_rows(const ParametrizationProblem& problem, int row, std::vector<Triplet>& triplets,
+                       std::vector<double>& rhs) const;
+  // Fills var_face_start / var_face (free variable -> faces).
+  void index_variable_faces(const ParametrizationProblem& problem);
 };
 
 ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
@@ -215,157 +245,190 @@ ParametrizationProblem::System& ParametrizationProblem::system(ConstraintMode mo
   const bool with_penalty = mode == ConstraintMode::Penalty && !constraints_.empty();
   if (system_ && system_->mode == mode && (!with_penalty || system_->penalty_weight == penalty_weight)) return *system_;
   system_.reset();
-  auto sys = std::make_unique<System>();
-  sys->mode = mode;
-  sys->penalty_weight = penalty_weight;
-  const int nf = mesh_.num_faces(), nw = num_wedges_;
-  const int num_vars = 2 * nw + 2 * static_cast<int>(cut_halfedges_.size());
-  auto wedge_var = [&](int corner, int axis) { return 2 * wedge_of_[corner] + axis; };
+  system_ = std::make_unique<System>(*this, mode, penalty_weight, progress);
+  return *system_;
+}
 
-  // Exact elimination of the hard constraints. Translations are preferred as pivots, then
-  // wedges: an arc's translation becomes the difference of wedges at its end, and the second side
-  // of the arc R * first side + that difference. (With wedges first, the cone positions became
-  // functions of the translations and every wedge a sum of translations along the cut tree: forms
-  // of thousands of terms on meshes with many singularities, a dense energy matrix and slow
-  // repair solves.)
+ParametrizationProblem::System::System(const ParametrizationProblem& problem, ConstraintMode constraint_mode,
+                                       double weight, Progress& progress)
+    : wedge_of(problem.wedge_of_), mode(constraint_mode), penalty_weight(weight) {
+  const bool with_penalty = mode == ConstraintMode::Penalty && !problem.constraints_.empty();
+  LinearElimination elim = eliminate(problem);
+  progress.check_cancel();
+  expand_forms(elim, problem.num_wedges_);
+  progress.check_cancel();
+  find_forced_degenerate(problem);
+  assemble_energy(problem, with_penalty, progress);
+  progress.check_cancel();
+  index_variable_faces(problem);
+}
+
+LinearElimination ParametrizationProblem::System::eliminate(const ParametrizationProblem& problem) const {
+  const int nw = problem.num_wedges_;
+  const int num_vars = 2 * nw + 2 * static_cast<int>(problem.cut_halfedges_.size());
+
+  // Translations are preferred as pivots, then wedges: an arc's translation becomes the difference
+  // of wedges at its end, and the second side of the arc R * first side + that difference. (With
+  // wedges first, the cone positions became functions of the translations and every wedge a sum
+  // of translations along the cut tree: forms of thousands of terms on meshes with many
+  // singularities, a dense energy matrix and slow repair solves.)
   LinearElimination elim(num_vars);
   for (int v = 0; v < 2 * nw; ++v) elim.set_priority(v, 1);
   for (int v = 2 * nw; v < num_vars; ++v) elim.set_priority(v, 2);
-  if (pin_) {
+  if (problem.pin_) {
     for (int a = 0; a < 2; ++a) {
       elim.set_priority(wedge_var(0, a), 3);
       elim.add_equation({{wedge_var(0, a), 1.0}}, 0.0);
     }
   }
-  for (size_t k = 0; k < cut_halfedges_.size(); ++k) {
-    const int h = cut_halfedges_[k], o = mesh_.opposite[h];
+  for (size_t k = 0; k < problem.cut_halfedges_.size(); ++k) {
+    const int h = problem.cut_halfedges_[k], o = problem.mesh_.opposite[h];
     const int ends[2][2] = {{h, TriMesh::next(o)}, {TriMesh::next(h), o}};  // (corner in f, corner in g)
     for (const auto& end : ends)
       for (int a = 0; a < 2; ++a) {
-        const RotatedAxis ra = rotated_axis(rotation_[h], a);
+        const RotatedAxis ra = rotated_axis(problem.rotation_[h], a);
         elim.add_equation({{wedge_var(end[1], a), 1.0},
                            {wedge_var(end[0], ra.axis), -ra.sign},
                            {2 * nw + 2 * static_cast<int>(k) + a, -1.0}},
                           0.0);
       }
   }
-  for (const auto& [h, axis] : isolines_)
+  for (const auto& [h, axis] : problem.isolines_)
     elim.add_equation({{wedge_var(h, axis), 1.0}, {wedge_var(TriMesh::next(h), axis), -1.0}}, 0.0);
   if (mode == ConstraintMode::Hard)
-    for (const LinearConstraint& lc : constraints_) {
+    for (const LinearConstraint& lc : problem.constraints_) {
       LinearForm form;
       for (const CornerTerm& t : lc.terms) form.push_back({wedge_var(t.corner, t.axis), t.coeff});
       elim.add_equation(std::move(form), lc.rhs);
     }
-  progress.check_cancel();
-  sys->non_integer_pivots = elim.non_integer_pivots();
-  sys->redundant = elim.redundant_equations();
-  sys->inconsistent = elim.inconsistent_equations();
+  return elim;
+}
+
+void ParametrizationProblem::System::expand_forms(LinearElimination& elim, int num_wedges) {
+  const int nw = num_wedges;
+  non_integer_pivots = elim.non_integer_pivots();
+  redundant = elim.redundant_equations();
+  inconsistent = elim.inconsistent_equations();
   const std::vector<int> free_index = elim.free_index();
-  sys->num_free = static_cast<int>(elim.free_variables().size());
-  sys->form_start.assign(2 * nw + 1, 0);
-  sys->form_const.assign(2 * nw, 0.0);
+  num_free = static_cast<int>(elim.free_variables().size());
+  form_start.assign(2 * nw + 1, 0);
+  form_const.assign(2 * nw, 0.0);
   for (int v = 0; v < 2 * nw; ++v) {
     double constant = 0;
     const LinearForm form = elim.expansion(v, &constant);
     for (const LinearTerm& t : form) {
-      sys->form_var.push_back(free_index[t.var]);
-      sys->form_coeff.push_back(t.coeff);
+      form_var.push_back(free_index[t.var]);
+      form_coeff.push_back(t.coeff);
     }
-    sys->form_const[v] = constant;
-    sys->form_start[v + 1] = static_cast<int>(sys->form_var.size());
+    form_const[v] = constant;
+    form_start[v + 1] = static_cast<int>(form_var.size());
   }
-  progress.check_cancel();
+}
 
-  // Faces whose three corners share a coordinate by the hard constraints alone.
-  auto same_form = [&](int va, int vb) {
-    if (sys->form_const[va] != sys->form_const[vb]) return false;
-    const int la = sys->form_start[va + 1] - sys->form_start[va], lb = sys->form_start[vb + 1] - sys->form_start[vb];
-    if (la != lb) return false;
-    for (int i = 0; i < la; ++i)
-      if (sys->form_var[sys->form_start[va] + i] != sys->form_var[sys->form_start[vb] + i] ||
-          sys->form_coeff[sys->form_start[va] + i] != sys->form_coeff[sys->form_start[vb] + i])
-        return false;
-    return true;
-  };
-  sys->forced_degenerate.assign(nf, 0);
+bool ParametrizationProblem::System::same_form(int va, int vb) const {
+  if (form_const[va] != form_const[vb]) return false;
+  const int la = form_start[va + 1] - form_start[va], lb = form_start[vb + 1] - form_start[vb];
+  if (la != lb) return false;
+  for (int i = 0; i < la; ++i)
+    if (form_var[form_start[va] + i] != form_var[form_start[vb] + i] ||
+        form_coeff[form_start[va] + i] != form_coeff[form_start[vb] + i])
+      return false;
+  return true;
+}
+
+void ParametrizationProblem::System::find_forced_degenerate(const ParametrizationProblem& problem) {
+  const int nf = problem.mesh_.num_faces();
+  forced_degenerate.assign(nf, 0);
   for (int f = 0; f < nf; ++f) {
     for (int a = 0; a < 2; ++a)
       if (same_form(wedge_var(3 * f, a), wedge_var(3 * f + 1, a)) && same_form(wedge_var(3 * f, a), wedge_var(3 * f + 2, a)))
-        sys->forced_degenerate[f] = 1;
+        forced_degenerate[f] = 1;
     for (int k = 0; k < 3; ++k) {
       const int c0 = 3 * f + k, c1 = 3 * f + (k + 1) % 3;
       if (same_form(wedge_var(c0, 0), wedge_var(c1, 0)) && same_form(wedge_var(c0, 1), wedge_var(c1, 1)))
-        sys->forced_degenerate[f] = 1;
+        forced_degenerate[f] = 1;
     }
   }
+}
 
-  // Least-squares rows: per face and axis the two gradient components, weighted by sqrt(area).
+void ParametrizationProblem::System::assemble_energy(const ParametrizationProblem& problem, bool with_penalty,
+                                                     Progress& progress) {
+  const int nf = problem.mesh_.num_faces();
   std::vector<Triplet> triplets;
   std::vector<double> rhs;
   triplets.reserve(static_cast<size_t>(nf) * 16);
   rhs.reserve(static_cast<size_t>(4) * nf);
+  int row = add_energy_rows(problem, triplets, rhs, progress);
+  if (with_penalty) row = add_penalty_rows(problem, row, triplets, rhs);
+  SpMat M(row, num_free);
+  M.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  const Eigen::Map<const Eigen::VectorXd> d(rhs.data(), row);
+  Q = SpMat(M.transpose() * M);
+  c = M.transpose() * d;
+  d2 = d.squaredNorm();
+}
+
+int ParametrizationProblem::System::add_energy_rows(const ParametrizationProblem& problem,
+                                                    std::vector<Triplet>& triplets, std::vector<double>& rhs,
+                                                    Progress& progress) const {
+  const int nf = problem.mesh_.num_faces();
   int row = 0;
   for (int f = 0; f < nf; ++f) {
-    const double w = std::sqrt(ideal_area_[f]);
+    const double w = std::sqrt(problem.ideal_area_[f]);
     for (int a = 0; a < 2; ++a)
       for (int j = 0; j < 2; ++j, ++row) {
         double b = (a == j) ? w : 0.0;  // target gradient: (1,0) for u, (0,1) for v
         for (int k = 0; k < 3; ++k) {
-          const double g = w * gradient_[f][3 * j + k];
+          const double g = w * problem.gradient_[f][3 * j + k];
           const int v = wedge_var(3 * f + k, a);
-          for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
-            triplets.emplace_back(row, sys->form_var[i], g * sys->form_coeff[i]);
-          b -= g * sys->form_const[v];
+          for (int i = form_start[v]; i < form_start[v + 1]; ++i)
+            triplets.emplace_back(row, form_var[i], g * form_coeff[i]);
+          b -= g * form_const[v];
         }
         rhs.push_back(b);
       }
     if ((f & 0xffff) == 0) progress.check_cancel();
   }
-  if (with_penalty) {
-    const double w = std::sqrt(penalty_weight);
-    for (const LinearConstraint& lc : constraints_) {
-      double b = w * lc.rhs;
-      for (const CornerTerm& t : lc.terms) {
-        const int v = wedge_var(t.corner, t.axis);
-        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
-          triplets.emplace_back(row, sys->form_var[i], w * t.coeff * sys->form_coeff[i]);
-        b -= w * t.coeff * sys->form_const[v];
-      }
-      rhs.push_back(b);
-      ++row;
-    }
-  }
-  SpMat M(row, sys->num_free);
-  M.setFromTriplets(triplets.begin(), triplets.end());
-  triplets = {};
-  const Eigen::Map<const Eigen::VectorXd> d(rhs.data(), row);
-  sys->Q = SpMat(M.transpose() * M);
-  sys->c = M.transpose() * d;
-  sys->d2 = d.squaredNorm();
-  progress.check_cancel();
+  return row;
+}
 
-  // Free variable -> faces.
+int ParametrizationProblem::System::add_penalty_rows(const ParametrizationProblem& problem, int row,
+                                                     std::vector<Triplet>& triplets, std::vector<double>& rhs) const {
+  const double w = std::sqrt(penalty_weight);
+  for (const LinearConstraint& lc : problem.constraints_) {
+    double b = w * lc.rhs;
+    for (const CornerTerm& t : lc.terms) {
+      const int v = wedge_var(t.corner, t.axis);
+      for (int i = form_start[v]; i < form_start[v + 1]; ++i)
+        triplets.emplace_back(row, form_var[i], w * t.coeff * form_coeff[i]);
+      b -= w * t.coeff * form_const[v];
+    }
+    rhs.push_back(b);
+    ++row;
+  }
+  return row;
+}
+
+void ParametrizationProblem::System::index_variable_faces(const ParametrizationProblem& problem) {
+  const int nf = problem.mesh_.num_faces();
   std::vector<std::pair<int, int>> pairs;  // (var, face)
   for (int f = 0; f < nf; ++f) {
     const size_t first = pairs.size();
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 2; ++a) {
         const int v = wedge_var(3 * f + k, a);
-        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i) pairs.push_back({sys->form_var[i], f});
+        for (int i = form_start[v]; i < form_start[v + 1]; ++i) pairs.push_back({form_var[i], f});
       }
     std::sort(pairs.begin() + static_cast<long>(first), pairs.end());
     pairs.erase(std::unique(pairs.begin() + static_cast<long>(first), pairs.end()), pairs.end());
   }
   std::sort(pairs.begin(), pairs.end());
-  sys->var_face_start.assign(sys->num_free + 1, 0);
-  for (const auto& p : pairs) ++sys->var_face_start[p.first + 1];
-  for (int v = 0; v < sys->num_free; ++v) sys->var_face_start[v + 1] += sys->var_face_start[v];
-  sys->var_face.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) sys->var_face[i] = pairs[i].second;
-
-  system_ = std::move(sys);
-  return *system_;
+  var_face_start.assign(num_free + 1, 0);
+  for (const auto& p : pairs) ++var_face_start[p.first + 1];
+  for (int v = 0; v < num_free; ++v) var_face_start[v + 1] += var_face_start[v];
+  var_face.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) var_face[i] = pairs[i].second;
 }
 
 namespace {
