@@ -40,12 +40,21 @@ RotatedAxis rotated_axis(int r, int axis) {
 
 // kWound: positive, but around a vertex whose one-ring winds a full turn off its cone angle.
 enum FaceState : char { kHealthy = 0, kThin = 1, kDegenerate = 2, kFlipped = 3, kForced = 4, kWound = 5 };
+// Reference triangles of bad faces: kUnfold: the current triangle with one vertex moved across its
+// opposite edge (the smallest change; keeps isoline edges); kPropagated: the ideal shape rotated
+// like the healthy neighbourhood; kOwnFit: the ideal shape rotated to fit the current one;
+// kAllElastic: as kPropagated, and healthy faces may leave their sectors too (at a cost).
 enum RepairStrategy { kUnfold = 0, kPropagated = 1, kOwnFit = 2, kAllElastic = 3 };
 
 }  // namespace
 
 // Elimination and energy for one constraint mode.
 struct ParametrizationProblem::System {
+  // Eliminates the hard constraints of `problem` and assembles its energy in the free variables
+  // (plus, in Penalty mode, the caller's linear constraints weighted by penalty_weight).
+  System(const ParametrizationProblem& problem, ConstraintMode constraint_mode, double weight, Progress& progress);
+
+  const std::vector<int>& wedge_of;  // the problem's corner -> wedge
   ConstraintMode mode = ConstraintMode::Hard;
   double penalty_weight = 0;
   int num_free = 0;
@@ -62,6 +71,31 @@ struct ParametrizationProblem::System {
   bool factorized = false;
   std::vector<int> var_face_start, var_face;  // free variable -> faces whose corners use it
   std::vector<char> forced_degenerate;        // #F
+
+ private:
+  // Variable (before the elimination) of coordinate `axis` of the wedge of `corner`.
+  int wedge_var(int corner, int axis) const { return 2 * wedge_of[corner] + axis; }
+  // The exact elimination of the hard constraints: pin, transitions, isolines and, in Hard mode,
+  // the caller's linear constraints.
+  LinearElimination eliminate(const ParametrizationProblem& problem) const;
+  // Every wedge coordinate as a form in the free variables (form_*), and the elimination's counts.
+  void expand_forms(LinearElimination& elim, int num_wedges);
+  // True when coordinates va and vb have the same form (are equal by the hard constraints alone).
+  bool same_form(int va, int vb) const;
+  // Marks the faces whose three corners share a coordinate (or two corners coincide) by the hard
+  // constraints alone.
+  void find_forced_degenerate(const ParametrizationProblem& problem);
+  // Q, c and d2 from the least-squares rows of the energy (and of the penalty when with_penalty).
+  void assemble_energy(const ParametrizationProblem& problem, bool with_penalty, Progress& progress);
+  // Appends the energy's least-squares rows (per face and axis the two gradient components,
+  // weighted by sqrt(area)); returns their number.
+  int add_energy_rows(const ParametrizationProblem& problem, std::vector<Triplet>& triplets,
+                      std::vector<double>& rhs, Progress& progress) const;
+  // Appends one penalty row per linear constraint from row `row` on; returns the next row.
+  int add_penalty_rows(const ParametrizationProblem& problem, int row, std::vector<Triplet>& triplets,
+                       std::vector<double>& rhs) const;
+  // Fills var_face_start / var_face (free variable -> faces).
+  void index_variable_faces(const ParametrizationProblem& problem);
 };
 
 ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
@@ -215,157 +249,190 @@ ParametrizationProblem::System& ParametrizationProblem::system(ConstraintMode mo
   const bool with_penalty = mode == ConstraintMode::Penalty && !constraints_.empty();
   if (system_ && system_->mode == mode && (!with_penalty || system_->penalty_weight == penalty_weight)) return *system_;
   system_.reset();
-  auto sys = std::make_unique<System>();
-  sys->mode = mode;
-  sys->penalty_weight = penalty_weight;
-  const int nf = mesh_.num_faces(), nw = num_wedges_;
-  const int num_vars = 2 * nw + 2 * static_cast<int>(cut_halfedges_.size());
-  auto wedge_var = [&](int corner, int axis) { return 2 * wedge_of_[corner] + axis; };
+  system_ = std::make_unique<System>(*this, mode, penalty_weight, progress);
+  return *system_;
+}
 
-  // Exact elimination of the hard constraints. Translations are preferred as pivots, then
-  // wedges: an arc's translation becomes the difference of wedges at its end, and the second side
-  // of the arc R * first side + that difference. (With wedges first, the cone positions became
-  // functions of the translations and every wedge a sum of translations along the cut tree: forms
-  // of thousands of terms on meshes with many singularities, a dense energy matrix and slow
-  // repair solves.)
+ParametrizationProblem::System::System(const ParametrizationProblem& problem, ConstraintMode constraint_mode,
+                                       double weight, Progress& progress)
+    : wedge_of(problem.wedge_of_), mode(constraint_mode), penalty_weight(weight) {
+  const bool with_penalty = mode == ConstraintMode::Penalty && !problem.constraints_.empty();
+  LinearElimination elim = eliminate(problem);
+  progress.check_cancel();
+  expand_forms(elim, problem.num_wedges_);
+  progress.check_cancel();
+  find_forced_degenerate(problem);
+  assemble_energy(problem, with_penalty, progress);
+  progress.check_cancel();
+  index_variable_faces(problem);
+}
+
+LinearElimination ParametrizationProblem::System::eliminate(const ParametrizationProblem& problem) const {
+  const int nw = problem.num_wedges_;
+  const int num_vars = 2 * nw + 2 * static_cast<int>(problem.cut_halfedges_.size());
+
+  // Translations are preferred as pivots, then wedges: an arc's translation becomes the difference
+  // of wedges at its end, and the second side of the arc R * first side + that difference. (With
+  // wedges first, the cone positions became functions of the translations and every wedge a sum
+  // of translations along the cut tree: forms of thousands of terms on meshes with many
+  // singularities, a dense energy matrix and slow repair solves.)
   LinearElimination elim(num_vars);
   for (int v = 0; v < 2 * nw; ++v) elim.set_priority(v, 1);
   for (int v = 2 * nw; v < num_vars; ++v) elim.set_priority(v, 2);
-  if (pin_) {
+  if (problem.pin_) {
     for (int a = 0; a < 2; ++a) {
       elim.set_priority(wedge_var(0, a), 3);
       elim.add_equation({{wedge_var(0, a), 1.0}}, 0.0);
     }
   }
-  for (size_t k = 0; k < cut_halfedges_.size(); ++k) {
-    const int h = cut_halfedges_[k], o = mesh_.opposite[h];
+  for (size_t k = 0; k < problem.cut_halfedges_.size(); ++k) {
+    const int h = problem.cut_halfedges_[k], o = problem.mesh_.opposite[h];
     const int ends[2][2] = {{h, TriMesh::next(o)}, {TriMesh::next(h), o}};  // (corner in f, corner in g)
     for (const auto& end : ends)
       for (int a = 0; a < 2; ++a) {
-        const RotatedAxis ra = rotated_axis(rotation_[h], a);
+        const RotatedAxis ra = rotated_axis(problem.rotation_[h], a);
         elim.add_equation({{wedge_var(end[1], a), 1.0},
                            {wedge_var(end[0], ra.axis), -ra.sign},
                            {2 * nw + 2 * static_cast<int>(k) + a, -1.0}},
                           0.0);
       }
   }
-  for (const auto& [h, axis] : isolines_)
+  for (const auto& [h, axis] : problem.isolines_)
     elim.add_equation({{wedge_var(h, axis), 1.0}, {wedge_var(TriMesh::next(h), axis), -1.0}}, 0.0);
   if (mode == ConstraintMode::Hard)
-    for (const LinearConstraint& lc : constraints_) {
+    for (const LinearConstraint& lc : problem.constraints_) {
       LinearForm form;
       for (const CornerTerm& t : lc.terms) form.push_back({wedge_var(t.corner, t.axis), t.coeff});
       elim.add_equation(std::move(form), lc.rhs);
     }
-  progress.check_cancel();
-  sys->non_integer_pivots = elim.non_integer_pivots();
-  sys->redundant = elim.redundant_equations();
-  sys->inconsistent = elim.inconsistent_equations();
+  return elim;
+}
+
+void ParametrizationProblem::System::expand_forms(LinearElimination& elim, int num_wedges) {
+  const int nw = num_wedges;
+  non_integer_pivots = elim.non_integer_pivots();
+  redundant = elim.redundant_equations();
+  inconsistent = elim.inconsistent_equations();
   const std::vector<int> free_index = elim.free_index();
-  sys->num_free = static_cast<int>(elim.free_variables().size());
-  sys->form_start.assign(2 * nw + 1, 0);
-  sys->form_const.assign(2 * nw, 0.0);
+  num_free = static_cast<int>(elim.free_variables().size());
+  form_start.assign(2 * nw + 1, 0);
+  form_const.assign(2 * nw, 0.0);
   for (int v = 0; v < 2 * nw; ++v) {
     double constant = 0;
     const LinearForm form = elim.expansion(v, &constant);
     for (const LinearTerm& t : form) {
-      sys->form_var.push_back(free_index[t.var]);
-      sys->form_coeff.push_back(t.coeff);
+      form_var.push_back(free_index[t.var]);
+      form_coeff.push_back(t.coeff);
     }
-    sys->form_const[v] = constant;
-    sys->form_start[v + 1] = static_cast<int>(sys->form_var.size());
+    form_const[v] = constant;
+    form_start[v + 1] = static_cast<int>(form_var.size());
   }
-  progress.check_cancel();
+}
 
-  // Faces whose three corners share a coordinate by the hard constraints alone.
-  auto same_form = [&](int va, int vb) {
-    if (sys->form_const[va] != sys->form_const[vb]) return false;
-    const int la = sys->form_start[va + 1] - sys->form_start[va], lb = sys->form_start[vb + 1] - sys->form_start[vb];
-    if (la != lb) return false;
-    for (int i = 0; i < la; ++i)
-      if (sys->form_var[sys->form_start[va] + i] != sys->form_var[sys->form_start[vb] + i] ||
-          sys->form_coeff[sys->form_start[va] + i] != sys->form_coeff[sys->form_start[vb] + i])
-        return false;
-    return true;
-  };
-  sys->forced_degenerate.assign(nf, 0);
+bool ParametrizationProblem::System::same_form(int va, int vb) const {
+  if (form_const[va] != form_const[vb]) return false;
+  const int la = form_start[va + 1] - form_start[va], lb = form_start[vb + 1] - form_start[vb];
+  if (la != lb) return false;
+  for (int i = 0; i < la; ++i)
+    if (form_var[form_start[va] + i] != form_var[form_start[vb] + i] ||
+        form_coeff[form_start[va] + i] != form_coeff[form_start[vb] + i])
+      return false;
+  return true;
+}
+
+void ParametrizationProblem::System::find_forced_degenerate(const ParametrizationProblem& problem) {
+  const int nf = problem.mesh_.num_faces();
+  forced_degenerate.assign(nf, 0);
   for (int f = 0; f < nf; ++f) {
     for (int a = 0; a < 2; ++a)
       if (same_form(wedge_var(3 * f, a), wedge_var(3 * f + 1, a)) && same_form(wedge_var(3 * f, a), wedge_var(3 * f + 2, a)))
-        sys->forced_degenerate[f] = 1;
+        forced_degenerate[f] = 1;
     for (int k = 0; k < 3; ++k) {
       const int c0 = 3 * f + k, c1 = 3 * f + (k + 1) % 3;
       if (same_form(wedge_var(c0, 0), wedge_var(c1, 0)) && same_form(wedge_var(c0, 1), wedge_var(c1, 1)))
-        sys->forced_degenerate[f] = 1;
+        forced_degenerate[f] = 1;
     }
   }
+}
 
-  // Least-squares rows: per face and axis the two gradient components, weighted by sqrt(area).
+void ParametrizationProblem::System::assemble_energy(const ParametrizationProblem& problem, bool with_penalty,
+                                                     Progress& progress) {
+  const int nf = problem.mesh_.num_faces();
   std::vector<Triplet> triplets;
   std::vector<double> rhs;
   triplets.reserve(static_cast<size_t>(nf) * 16);
   rhs.reserve(static_cast<size_t>(4) * nf);
+  int row = add_energy_rows(problem, triplets, rhs, progress);
+  if (with_penalty) row = add_penalty_rows(problem, row, triplets, rhs);
+  SpMat M(row, num_free);
+  M.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  const Eigen::Map<const Eigen::VectorXd> d(rhs.data(), row);
+  Q = SpMat(M.transpose() * M);
+  c = M.transpose() * d;
+  d2 = d.squaredNorm();
+}
+
+int ParametrizationProblem::System::add_energy_rows(const ParametrizationProblem& problem,
+                                                    std::vector<Triplet>& triplets, std::vector<double>& rhs,
+                                                    Progress& progress) const {
+  const int nf = problem.mesh_.num_faces();
   int row = 0;
   for (int f = 0; f < nf; ++f) {
-    const double w = std::sqrt(ideal_area_[f]);
+    const double w = std::sqrt(problem.ideal_area_[f]);
     for (int a = 0; a < 2; ++a)
       for (int j = 0; j < 2; ++j, ++row) {
         double b = (a == j) ? w : 0.0;  // target gradient: (1,0) for u, (0,1) for v
         for (int k = 0; k < 3; ++k) {
-          const double g = w * gradient_[f][3 * j + k];
+          const double g = w * problem.gradient_[f][3 * j + k];
           const int v = wedge_var(3 * f + k, a);
-          for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
-            triplets.emplace_back(row, sys->form_var[i], g * sys->form_coeff[i]);
-          b -= g * sys->form_const[v];
+          for (int i = form_start[v]; i < form_start[v + 1]; ++i)
+            triplets.emplace_back(row, form_var[i], g * form_coeff[i]);
+          b -= g * form_const[v];
         }
         rhs.push_back(b);
       }
     if ((f & 0xffff) == 0) progress.check_cancel();
   }
-  if (with_penalty) {
-    const double w = std::sqrt(penalty_weight);
-    for (const LinearConstraint& lc : constraints_) {
-      double b = w * lc.rhs;
-      for (const CornerTerm& t : lc.terms) {
-        const int v = wedge_var(t.corner, t.axis);
-        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i)
-          triplets.emplace_back(row, sys->form_var[i], w * t.coeff * sys->form_coeff[i]);
-        b -= w * t.coeff * sys->form_const[v];
-      }
-      rhs.push_back(b);
-      ++row;
-    }
-  }
-  SpMat M(row, sys->num_free);
-  M.setFromTriplets(triplets.begin(), triplets.end());
-  triplets = {};
-  const Eigen::Map<const Eigen::VectorXd> d(rhs.data(), row);
-  sys->Q = SpMat(M.transpose() * M);
-  sys->c = M.transpose() * d;
-  sys->d2 = d.squaredNorm();
-  progress.check_cancel();
+  return row;
+}
 
-  // Free variable -> faces.
+int ParametrizationProblem::System::add_penalty_rows(const ParametrizationProblem& problem, int row,
+                                                     std::vector<Triplet>& triplets, std::vector<double>& rhs) const {
+  const double w = std::sqrt(penalty_weight);
+  for (const LinearConstraint& lc : problem.constraints_) {
+    double b = w * lc.rhs;
+    for (const CornerTerm& t : lc.terms) {
+      const int v = wedge_var(t.corner, t.axis);
+      for (int i = form_start[v]; i < form_start[v + 1]; ++i)
+        triplets.emplace_back(row, form_var[i], w * t.coeff * form_coeff[i]);
+      b -= w * t.coeff * form_const[v];
+    }
+    rhs.push_back(b);
+    ++row;
+  }
+  return row;
+}
+
+void ParametrizationProblem::System::index_variable_faces(const ParametrizationProblem& problem) {
+  const int nf = problem.mesh_.num_faces();
   std::vector<std::pair<int, int>> pairs;  // (var, face)
   for (int f = 0; f < nf; ++f) {
     const size_t first = pairs.size();
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 2; ++a) {
         const int v = wedge_var(3 * f + k, a);
-        for (int i = sys->form_start[v]; i < sys->form_start[v + 1]; ++i) pairs.push_back({sys->form_var[i], f});
+        for (int i = form_start[v]; i < form_start[v + 1]; ++i) pairs.push_back({form_var[i], f});
       }
     std::sort(pairs.begin() + static_cast<long>(first), pairs.end());
     pairs.erase(std::unique(pairs.begin() + static_cast<long>(first), pairs.end()), pairs.end());
   }
   std::sort(pairs.begin(), pairs.end());
-  sys->var_face_start.assign(sys->num_free + 1, 0);
-  for (const auto& p : pairs) ++sys->var_face_start[p.first + 1];
-  for (int v = 0; v < sys->num_free; ++v) sys->var_face_start[v + 1] += sys->var_face_start[v];
-  sys->var_face.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) sys->var_face[i] = pairs[i].second;
-
-  system_ = std::move(sys);
-  return *system_;
+  var_face_start.assign(num_free + 1, 0);
+  for (const auto& p : pairs) ++var_face_start[p.first + 1];
+  for (int v = 0; v < num_free; ++v) var_face_start[v + 1] += var_face_start[v];
+  var_face.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) var_face[i] = pairs[i].second;
 }
 
 namespace {
@@ -423,611 +490,891 @@ double ParametrizationProblem::constraint_violation(const Parametrization& param
   return worst;
 }
 
-ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolveOptions& options, Progress& progress) {
-  const int nf = mesh_.num_faces(), nc = 3 * nf;
-  if (options.reference && (options.reference->uv.rows() != nc))
-    throw Error(ErrorCode::InvalidArgument, "parametrization: the reference pose does not match the mesh");
-  auto report = [&](double t) {
-    progress.update(options.progress_begin + t * (options.progress_end - options.progress_begin));
-  };
-  ParametrizationSolution out;
-  ParametrizationSolveStats& st = out.stats;
+namespace {
 
-  Timer timer;
-  System& sys = system(options.linear_constraints, options.penalty_weight, progress);
-  st.seconds_assembly = timer.seconds();
-  st.free_variables = sys.num_free;
-  st.non_integer_pivots = sys.non_integer_pivots;
-  st.redundant_constraints = sys.redundant;
-  st.inconsistent_constraints = sys.inconsistent;
-  report(0.15);
+// Faces by state in one pose (see ParametrizationProblem::Solver::census).
+struct Census {
+  std::vector<char> state;
+  std::vector<char> wound;  // #F: in a region around wound vertices (see mark_wound)
+  int flipped = 0, degenerate = 0, thin = 0, forced = 0, wound_faces = 0;
+  bool field_frame = false;  // every bad face's reference is its ideal shape in the field's frame
+  double min_ratio = 0;
+  double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
+  int bad() const { return flipped + degenerate + thin + wound_faces; }
+};
 
-  // Equality-only optimum.
-  timer = Timer();
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(sys.num_free);
-  if (sys.num_free > 0) {
-    if (!sys.factorized) {
-      sys.cholesky.compute(sys.Q);
-      if (sys.cholesky.info() != Eigen::Success)
-        throw Error(ErrorCode::StageFailed,
-                    "parametrization: the energy is not positive definite (a part of the mesh is unconstrained)");
-      sys.factorized = true;
-    }
-    z = sys.cholesky.solve(sys.c);
-    if (sys.cholesky.info() != Eigen::Success || !z.allFinite())
-      throw Error(ErrorCode::StageFailed, "parametrization: the sparse Cholesky solve failed");
+// Faces the repair works on: all but healthy and forced degenerate ones.
+bool is_bad(char state) { return state != kHealthy && state != kForced; }
+
+// The best pose of a local repair and the rounds since the last accepted one.
+struct RepairTrack {
+  Census best;  // the best pose seen (fewest bad faces, then least depth)
+  Eigen::VectorXd best_z;
+  int best_round = -1;
+  int rejected = 0;
+};
+
+// Rotations (relative to the field) of the reference shapes of one region while they spread.
+struct ReferenceRotations {
+  std::vector<Vec2> rotation;  // #F unit vectors
+  std::vector<char> assigned;  // #F
+  std::vector<int> layer;      // faces assigned last, whose neighbours follow
+};
+
+// The QP of one Ipopt solve over a region's variables, as it is built.
+struct RegionQP {
+  std::vector<int> local;  // free variable -> QP variable, or -1 (stays fixed)
+  std::vector<int> vars;   // QP variable -> free variable
+  std::vector<int> faces;  // faces with tri-sector constraints
+  SparseQP qp;
+  std::vector<Triplet> ct;  // constraint matrix entries
+  std::vector<double> lower;
+  std::vector<std::pair<int, double>> elastic;  // (row, cost per unit of violation)
+  int rows = 0;
+};
+
+// Bisector directions of a positively oriented triangle r: bound[k] between edge k-1 and edge k.
+void sector_bisectors(const Vec2 r[3], Vec2 bound[3]) {
+  Vec2 dir[3];
+  for (int k = 0; k < 3; ++k) dir[k] = (r[(k + 1) % 3] - r[k]).normalized();
+  for (int k = 0; k < 3; ++k) {  // bisector between edge k-1 and edge k
+    const Vec2& a = dir[(k + 2) % 3];
+    const double turn = std::atan2(cross2(a, dir[k]), a.dot(dir[k]));  // in (0, pi)
+    const double half = 0.5 * turn;
+    bound[k] = Vec2(a.x() * std::cos(half) - a.y() * std::sin(half), a.x() * std::sin(half) + a.y() * std::cos(half));
   }
-  st.seconds_cholesky = timer.seconds();
-  report(0.3);
+}
 
-  const Evaluator ev{mesh_, wedge_of_, sys.form_start, sys.form_var, sys.form_coeff, sys.form_const};
-  auto objective = [&](const Eigen::VectorXd& x) { return x.dot(sys.Q * x) - 2 * sys.c.dot(x) + sys.d2; };
-  auto classify_face = [&](const Eigen::VectorXd& x, int f, double* ratio) -> FaceState {
-    const Vec2 a = ev.corner(x, 3 * f), b = ev.corner(x, 3 * f + 1), c = ev.corner(x, 3 * f + 2);
-    const double area = 0.5 * cross2(b - a, c - a);
-    if (ratio) *ratio = area / ideal_area_[f];
-    if (sys.forced_degenerate[f]) return kForced;
-    const int s = orient2d_sign(a, b, c);
-    if (s < 0) return kFlipped;
-    if (s == 0) return kDegenerate;
-    return area < options.min_area_ratio * ideal_area_[f] ? kThin : kHealthy;
-  };
-  // Vertex -> faces for region growth.
-  std::vector<int> vf_start(mesh_.num_vertices() + 1, 0), vf;
-  for (int c = 0; c < nc; ++c) ++vf_start[mesh_.F(c / 3, c % 3) + 1];
-  for (int v = 0; v < mesh_.num_vertices(); ++v) vf_start[v + 1] += vf_start[v];
-  vf.resize(nc);
-  {
-    std::vector<int> fill(vf_start.begin(), vf_start.end() - 1);
-    for (int c = 0; c < nc; ++c) vf[fill[mesh_.F(c / 3, c % 3)]++] = c / 3;
-  }
-  auto dilate = [&](std::vector<char>& in_region, int rings) {
-    std::vector<int> frontier;
-    for (int f = 0; f < nf; ++f)
-      if (in_region[f]) frontier.push_back(f);
-    for (int r = 0; r < rings && !frontier.empty(); ++r) {
-      std::vector<int> next;
-      for (int f : frontier)
-        for (int k = 0; k < 3; ++k) {
-          const int v = mesh_.F(f, k);
-          for (int i = vf_start[v]; i < vf_start[v + 1]; ++i)
-            if (!in_region[vf[i]]) in_region[vf[i]] = 1, next.push_back(vf[i]);
-        }
-      frontier.swap(next);
-    }
-  };
+}  // namespace
 
-  struct Census {
-    std::vector<char> state;
-    std::vector<char> wound;  // #F: in a region around wound vertices (see mark_wound)
-    int flipped = 0, degenerate = 0, thin = 0, forced = 0, wound_faces = 0;
-    bool field_frame = false;  // every bad face's reference is its ideal shape in the field's frame
-    double min_ratio = 0;
-    double depth = 0;  // sum over bad faces of (min_area_ratio - area / ideal area)
-    int bad() const { return flipped + degenerate + thin + wound_faces; }
-  };
-  // A flip-free map can still wind a one-ring a full turn off its cone (a valence-5 cone wound by
-  // 90 degrees); the quads would then have a wrong irregular vertex there. Such vertices, with
-  // rings around them until each cluster's turns cancel (up to 8 rings), become bad faces whose
-  // references follow the field (never their own wound pose).
-  auto mark_wound = [&](const Eigen::VectorXd& x, Census& cs) {
-    cs.wound.assign(nf, 0);
-    if (cone_quarter_turns_.empty() || !options.winding_repair) return;
-    const std::vector<int> charge = winding_charges([&](int c) { return ev.corner(x, c); });
-    std::vector<int> defects;
-    for (int v = 0; v < mesh_.num_vertices(); ++v) {
-      if (charge[v] == 0 || vf_start[v] == vf_start[v + 1]) continue;
-      bool clean = true;  // angles next to flipped faces say little; the global pass handles those
-      for (int i = vf_start[v]; i < vf_start[v + 1] && clean; ++i)
-        clean = cs.state[vf[i]] == kHealthy || cs.state[vf[i]] == kThin;
-      if (clean) defects.push_back(v);
-    }
-    if (defects.empty()) return;
-    std::vector<char> region(nf, 0);
-    for (int v : defects)
-      for (int i = vf_start[v]; i < vf_start[v + 1]; ++i) region[vf[i]] = 1;
-    dilate(region, 1);
-    for (int grow = 0; grow < 8; ++grow) {
-      // Connected parts of the region (faces sharing a vertex) and their total turns.
-      std::vector<int> part(nf, -1), turns;
-      for (int f0 = 0; f0 < nf; ++f0) {
-        if (!region[f0] || part[f0] >= 0) continue;
-        const int id = static_cast<int>(turns.size());
-        turns.push_back(0);
-        std::vector<int> stack{f0};
-        part[f0] = id;
-        while (!stack.empty()) {
-          const int f = stack.back();
-          stack.pop_back();
-          for (int k = 0; k < 3; ++k) {
-            const int v = mesh_.F(f, k);
-            for (int i = vf_start[v]; i < vf_start[v + 1]; ++i)
-              if (region[vf[i]] && part[vf[i]] < 0) part[vf[i]] = id, stack.push_back(vf[i]);
-          }
-        }
-      }
-      for (int v : defects) turns[part[vf[vf_start[v]]]] += charge[v];
-      std::vector<char> seed(nf, 0);
-      bool any = false;
-      for (int f = 0; f < nf; ++f)
-        if (region[f] && turns[part[f]] != 0) seed[f] = 1, any = true;
-      if (!any) break;
-      dilate(seed, 1);
-      for (int f = 0; f < nf; ++f) region[f] = region[f] || seed[f];
-    }
-    for (int f = 0; f < nf; ++f) {
-      if (!region[f] || cs.state[f] == kForced) continue;
-      cs.wound[f] = 1;
-      if (cs.state[f] == kHealthy) cs.state[f] = kWound, ++cs.wound_faces;
-    }
-  };
-  auto census = [&](const Eigen::VectorXd& x) {
-    Census cs;
-    cs.state.resize(nf);
-    cs.min_ratio = std::numeric_limits<double>::infinity();
-    for (int f = 0; f < nf; ++f) {
-      double ratio = 0;
-      cs.state[f] = classify_face(x, f, &ratio);
-      cs.min_ratio = std::min(cs.min_ratio, ratio);
-      cs.flipped += cs.state[f] == kFlipped;
-      cs.degenerate += cs.state[f] == kDegenerate || cs.state[f] == kForced;
-      cs.forced += cs.state[f] == kForced;
-      cs.thin += cs.state[f] == kThin;
-      if (cs.state[f] != kHealthy && cs.state[f] != kForced) cs.depth += std::max(0.0, options.min_area_ratio - ratio);
-    }
-    mark_wound(x, cs);
-    return cs;
-  };
+// One solve(): the equality-only optimum by sparse Cholesky, then the regularity repair with
+// Ipopt under tri-sector constraints (Bommes et al. 2013) and the re-linearization around the
+// regular pose (paper §7.1). Holds the pose and the repair's face sets between these phases.
+class ParametrizationProblem::Solver {
+ public:
+  Solver(const ParametrizationProblem& problem, System& sys, const ParametrizationSolveOptions& options,
+         Progress& progress, ParametrizationSolution& out);
+  // Runs every phase and fills the solution.
+  void run();
 
-  Census current = census(z);
-  {
-    Parametrization initial;
-    initial.uv.resize(nc, 2);
-    for (int c = 0; c < nc; ++c) initial.uv.row(c) = ev.corner(z, c).transpose();
-    st.energy_initial = field_energy(initial);
-  }
-  st.flipped_initial = current.flipped;
-  st.degenerate_initial = current.degenerate;
-  st.thin_initial = current.thin;
-  st.forced_degenerate = current.forced;
-
+ private:
+  // Reports fraction t of the caller's progress range.
+  void report(double t) const;
+  // Solution statistics of the system (free variables, elimination counts).
+  void record_system_stats();
+  // Equality-only optimum z = Q^-1 c by sparse Cholesky (factorized once per system).
+  void solve_equality_only();
+  // Vertex -> faces (vf_start_ / vf_) for region growth.
+  void index_vertex_faces();
+  // Energy and bad faces of the equality-only optimum.
+  void record_initial_stats();
   // Faces with isoline edges: the rotation (relative to the field) that puts the ideal isoline
   // edges exactly on their axes (unit vector; zero for other faces).
-  std::vector<Vec2> pinned_rotation(nf, Vec2::Zero());
-  std::vector<char> iso_halfedge(nc, 0);
-  for (const auto& [h, axis] : isolines_) {
+  void find_isoline_rotations();
+  // The final pose and its statistics.
+  void write_output();
+
+  // Objective (energy + penalty) of free variables x.
+  double objective(const Eigen::VectorXd& x) const { return x.dot(sys_.Q * x) - 2 * sys_.c.dot(x) + sys_.d2; }
+  // State of face f in pose x; *ratio = parametric / ideal area.
+  FaceState classify_face(const Eigen::VectorXd& x, int f, double* ratio) const;
+  // Every face's state in pose x, with the counts.
+  Census census(const Eigen::VectorXd& x) const;
+  // Adds `rings` rings of faces (sharing a vertex) around the faces in in_region.
+  void dilate(std::vector<char>& in_region, int rings) const;
+  // Marks the faces around vertices wound a full turn off their cone as wound (bad) faces.
+  void mark_wound(const Eigen::VectorXd& x, Census& cs) const;
+  // Vertices off their cone angle whose faces are all positive.
+  std::vector<int> wound_vertices(const std::vector<int>& charge, const Census& cs) const;
+  // Faces around the wound vertices, grown until each cluster's turns cancel.
+  std::vector<char> wound_region(const std::vector<int>& defects, const std::vector<int>& charge) const;
+  // Connected parts of region (faces sharing a vertex): part per face (-1 outside), *count parts.
+  std::vector<int> region_parts(const std::vector<char>& region, int* count) const;
+
+  // Whether the equality-only optimum needs the regularity repair.
+  bool needs_repair(const Census& initial) const;
+  // The repair rounds (local, global in the field's frame, local again), then re-linearization.
+  void repair();
+  // One global solve in the field's frame; true when local repair rounds should follow.
+  bool field_frame_solve();
+  // Local repair rounds (at most max_rounds) from the current bad faces; ends at the best pose.
+  void local_repair(int max_rounds);
+  // One local repair round; false when the repair should stop.
+  bool repair_round(int round, RepairTrack& track);
+  // Constrains faces that went bad outside the constrained set; true when `next` is rejected.
+  bool reject_escaped(const Census& next);
+  // Faces still bad get wider rings; the region and the constrained set grow accordingly.
+  void widen_rings();
+  // Region: each bad face with its own number of rings.
+  void grow_region();
+  // Adds the bad faces of cs (only those outside *only_outside if given) with `rings` rings to set.
+  void add_bad(const Census& cs, std::vector<char>& set, int rings, const std::vector<char>* only_outside) const;
+  // Re-linearization rounds around the regular pose.
+  void relinearize();
+
+  // One Ipopt solve of the region; returns x with the region's variables replaced.
+  Eigen::VectorXd solve_region(const std::vector<char>& in_region, const std::vector<char>& active,
+                               const Eigen::VectorXd& x, const Census& cs, int strategy, double pb, double pe,
+                               QPResult::Status* status);
+  // The region's variables and the faces they reach that get constraints.
+  RegionQP select_region(const std::vector<char>& in_region, const std::vector<char>& active);
+  // Rotation of face g's ideal shape that best fits its shape in x.
+  Vec2 best_fit(const Eigen::VectorXd& x, int g) const;
+  // Rotations of the reference shapes of the constrained faces without a valid reference.
+  std::vector<Vec2> reference_rotations(const std::vector<int>& faces, const Eigen::VectorXd& x,
+                                        const Census& cs, bool follow_neighbours) const;
+  // Rotation of bad face f; healthy neighbours join the first layer when it propagates.
+  void seed_rotation(int f, const Eigen::VectorXd& x, const Census& cs, bool follow_neighbours,
+                     ReferenceRotations& rr) const;
+  // Spreads the rotations inward through the bad faces, layer by layer.
+  void propagate_rotations(const Census& cs, ReferenceRotations& rr) const;
+  // Hessian, linear term and start of the objective over the region's variables (others fixed).
+  void add_objective(RegionQP& rq, const Eigen::VectorXd& x) const;
+  // Reference triangle of face f (corner k at r[k]).
+  void reference_triangle(int f, const Eigen::VectorXd& x, const Census& cs, int strategy, const Vec2& rotation,
+                          Vec2 r[3]) const;
+  // The caller's pose of face f in r; true when it is healthy there.
+  bool caller_reference(int f, Vec2 r[3]) const;
+  // Face f's pose in x with one vertex moved to the positive side; true when it is positive.
+  bool unfolded_reference(int f, const Eigen::VectorXd& x, Vec2 r[3]) const;
+  // Face f's ideal shape rotated by `rotation`.
+  void rotated_ideal(int f, const Vec2& rotation, Vec2 r[3]) const;
+  // Tri-sector constraint rows of face f around reference triangle r.
+  void add_sector_constraints(int f, const Vec2 r[3], const Eigen::VectorXd& x, const Census& cs, int strategy,
+                              RegionQP& rq) const;
+  // Slack variables of the elastic rows, and the constraint matrix.
+  void finish_constraints(RegionQP& rq) const;
+  // Runs Ipopt on the QP; returns x with the region's variables replaced by the solution.
+  Eigen::VectorXd run_ipopt(const RegionQP& rq, const Eigen::VectorXd& x, double pb, double pe,
+                            QPResult::Status* status);
+
+  const ParametrizationProblem& problem_;
+  const TriMesh& mesh_;
+  const std::vector<Vec2>& ideal_;
+  const std::vector<double>& ideal_area_;
+  System& sys_;
+  const ParametrizationSolveOptions& options_;
+  Progress& progress_;
+  ParametrizationSolution& out_;
+  ParametrizationSolveStats& st_;
+  const Evaluator ev_;
+  const int nf_, nc_;
+  const double pb_, span_;  // the caller's progress range: begin and length
+
+  std::vector<int> vf_start_, vf_;          // vertex -> faces
+  std::vector<Vec2> pinned_rotation_;       // #F, see find_isoline_rotations
+  std::vector<char> iso_halfedge_;          // 3#F: halfedges on isolines
+  Eigen::VectorXd z_;                       // the current pose (free variables)
+  Census current_;                          // its faces
+  // Active set: the variables of a region around the bad faces move; the bad faces and one ring
+  // around them are constrained. Faces that turn bad outside the constrained set join it.
+  std::vector<char> region_, active_;
+  std::vector<int> rings_;                  // #F per-face ring count (see repair)
+  std::vector<char> touched_;               // faces that were bad at some point
+  int first_rings_ = 0, max_rings_ = 0, rounds_ = 1;
+};
+
+ParametrizationProblem::Solver::Solver(const ParametrizationProblem& problem, System& sys,
+                                       const ParametrizationSolveOptions& options, Progress& progress,
+                                       ParametrizationSolution& out)
+    : problem_(problem),
+      mesh_(problem.mesh_),
+      ideal_(problem.ideal_),
+      ideal_area_(problem.ideal_area_),
+      sys_(sys),
+      options_(options),
+      progress_(progress),
+      out_(out),
+      st_(out.stats),
+      ev_{problem.mesh_, problem.wedge_of_, sys.form_start, sys.form_var, sys.form_coeff, sys.form_const},
+      nf_(problem.mesh_.num_faces()),
+      nc_(3 * nf_),
+      pb_(options.progress_begin),
+      span_(options.progress_end - options.progress_begin),
+      region_(nf_, 0),
+      active_(nf_, 0) {}
+
+void ParametrizationProblem::Solver::run() {
+  record_system_stats();
+  report(0.15);
+  solve_equality_only();
+  report(0.3);
+  index_vertex_faces();
+  current_ = census(z_);
+  record_initial_stats();
+  find_isoline_rotations();
+  if (needs_repair(current_)) repair();
+  report(1.0);
+  write_output();
+}
+
+void ParametrizationProblem::Solver::report(double t) const {
+  progress_.update(options_.progress_begin + t * (options_.progress_end - options_.progress_begin));
+}
+
+void ParametrizationProblem::Solver::record_system_stats() {
+  st_.free_variables = sys_.num_free;
+  st_.non_integer_pivots = sys_.non_integer_pivots;
+  st_.redundant_constraints = sys_.redundant;
+  st_.inconsistent_constraints = sys_.inconsistent;
+}
+
+void ParametrizationProblem::Solver::solve_equality_only() {
+  Timer timer;
+  z_ = Eigen::VectorXd::Zero(sys_.num_free);
+  if (sys_.num_free > 0) {
+    if (!sys_.factorized) {
+      sys_.cholesky.compute(sys_.Q);
+      if (sys_.cholesky.info() != Eigen::Success)
+        throw Error(ErrorCode::StageFailed,
+                    "parametrization: the energy is not positive definite (a part of the mesh is unconstrained)");
+      sys_.factorized = true;
+    }
+    z_ = sys_.cholesky.solve(sys_.c);
+    if (sys_.cholesky.info() != Eigen::Success || !z_.allFinite())
+      throw Error(ErrorCode::StageFailed, "parametrization: the sparse Cholesky solve failed");
+  }
+  st_.seconds_cholesky = timer.seconds();
+}
+
+void ParametrizationProblem::Solver::index_vertex_faces() {
+  vf_start_.assign(mesh_.num_vertices() + 1, 0);
+  for (int c = 0; c < nc_; ++c) ++vf_start_[mesh_.F(c / 3, c % 3) + 1];
+  for (int v = 0; v < mesh_.num_vertices(); ++v) vf_start_[v + 1] += vf_start_[v];
+  vf_.resize(nc_);
+  std::vector<int> fill(vf_start_.begin(), vf_start_.end() - 1);
+  for (int c = 0; c < nc_; ++c) vf_[fill[mesh_.F(c / 3, c % 3)]++] = c / 3;
+}
+
+void ParametrizationProblem::Solver::record_initial_stats() {
+  {
+    Parametrization initial;
+    initial.uv.resize(nc_, 2);
+    for (int c = 0; c < nc_; ++c) initial.uv.row(c) = ev_.corner(z_, c).transpose();
+    st_.energy_initial = problem_.field_energy(initial);
+  }
+  st_.flipped_initial = current_.flipped;
+  st_.degenerate_initial = current_.degenerate;
+  st_.thin_initial = current_.thin;
+  st_.forced_degenerate = current_.forced;
+}
+
+void ParametrizationProblem::Solver::find_isoline_rotations() {
+  pinned_rotation_.assign(nf_, Vec2::Zero());
+  iso_halfedge_.assign(nc_, 0);
+  for (const auto& [h, axis] : problem_.isolines_) {
     for (int side : {h, mesh_.opposite[h]}) {
       if (side < 0) continue;
-      iso_halfedge[side] = 1;
+      iso_halfedge_[side] = 1;
       const int f = side / 3;
-      const int a = side == h ? axis : (axis + rotation_[h]) % 2;
+      const int a = side == h ? axis : (axis + problem_.rotation_[h]) % 2;
       const Vec2 d = ideal_[TriMesh::next(side)] - ideal_[side];
       const double angle = std::atan2(d.y(), d.x());
       const double base = a == 0 ? M_PI / 2 : 0.0;  // u constant: the edge runs along v
       const double turn = std::remainder(base - angle, M_PI);  // nearest of base, base + pi
-      pinned_rotation[f] += Vec2(std::cos(turn), std::sin(turn));
+      pinned_rotation_[f] += Vec2(std::cos(turn), std::sin(turn));
     }
   }
-  for (Vec2& r : pinned_rotation)
+  for (Vec2& r : pinned_rotation_)
     if (r.squaredNorm() > 0) r.normalize();
+}
 
-  // One Ipopt solve over the variables of the region's corners; every face those variables reach
-  // gets tri-sector constraints linearized around its reference triangle.
-  auto solve_region = [&](const std::vector<char>& in_region, const std::vector<char>& active,
-                          const Eigen::VectorXd& x, const Census& cs, int strategy, double pb, double pe,
-                          QPResult::Status* status) -> Eigen::VectorXd {
-    // Reference triangles of bad faces (strategy): kUnfold: the current triangle with one
-    // vertex moved across its opposite edge (the smallest change; keeps isoline edges);
-    // kPropagated: the ideal shape rotated like the healthy neighbourhood; kOwnFit: the ideal
-    // shape rotated to fit the current one; kAllElastic: as kPropagated, and healthy faces may
-    // leave their sectors too (at a cost).
-    const bool follow_neighbours = strategy == kPropagated || strategy == kAllElastic;
-    // Variables used only by region faces move; the active faces they reach are constrained.
-    std::vector<int> local(sys.num_free, -1), vars;
-    for (int v = 0; v < sys.num_free; ++v) {
-      bool inside = sys.var_face_start[v] < sys.var_face_start[v + 1];
-      for (int i = sys.var_face_start[v]; i < sys.var_face_start[v + 1] && inside; ++i) inside = in_region[sys.var_face[i]];
-      if (inside) local[v] = static_cast<int>(vars.size()), vars.push_back(v);
-    }
-    std::vector<char> constrained(nf, 0);
-    std::vector<int> faces;
-    for (int v : vars)
-      for (int i = sys.var_face_start[v]; i < sys.var_face_start[v + 1]; ++i) {
-        const int f = sys.var_face[i];
-        if (active[f] && !constrained[f] && !sys.forced_degenerate[f]) constrained[f] = 1, faces.push_back(f);
-      }
-    const int n = static_cast<int>(vars.size());
-    st.max_region_faces = std::max(st.max_region_faces, static_cast<int>(faces.size()));
-    st.max_qp_variables = std::max(st.max_qp_variables, n);
+void ParametrizationProblem::Solver::write_output() {
+  Parametrization& p = out_.param;
+  p.uv.resize(nc_, 2);
+  for (int c = 0; c < nc_; ++c) p.uv.row(c) = ev_.corner(z_, c).transpose();
+  p.rotation = problem_.rotation_;
+  p.is_cut = problem_.is_cut_;
+  st_.flipped = current_.flipped;
+  st_.degenerate = current_.degenerate;
+  st_.winding_defects = problem_.winding_defects(p);
+  st_.thin = current_.thin;
+  st_.min_area_ratio = current_.min_ratio;
+  st_.energy = problem_.field_energy(p);
+  st_.constraint_violation = problem_.constraint_violation(p);
+}
 
-    // Faces without a valid reference use their ideal (isometric, field-aligned) shape rotated by
-    // the best-fit rotation of ideal onto current shape: their own, or (follow_neighbours) one
-    // propagated inward from the healthy faces around each bad cluster, so that adjacent bad
-    // faces agree. A rotation relative to the field is the same in every chart (rotations commute
-    // with the transitions), so it is carried across cuts unchanged.
-    auto best_fit = [&](int g) {
-      double re = 0, im = 0;
+FaceState ParametrizationProblem::Solver::classify_face(const Eigen::VectorXd& x, int f, double* ratio) const {
+  const Vec2 a = ev_.corner(x, 3 * f), b = ev_.corner(x, 3 * f + 1), c = ev_.corner(x, 3 * f + 2);
+  const double area = 0.5 * cross2(b - a, c - a);
+  if (ratio) *ratio = area / ideal_area_[f];
+  if (sys_.forced_degenerate[f]) return kForced;
+  const int s = orient2d_sign(a, b, c);
+  if (s < 0) return kFlipped;
+  if (s == 0) return kDegenerate;
+  return area < options_.min_area_ratio * ideal_area_[f] ? kThin : kHealthy;
+}
+
+Census ParametrizationProblem::Solver::census(const Eigen::VectorXd& x) const {
+  Census cs;
+  cs.state.resize(nf_);
+  cs.min_ratio = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < nf_; ++f) {
+    double ratio = 0;
+    cs.state[f] = classify_face(x, f, &ratio);
+    cs.min_ratio = std::min(cs.min_ratio, ratio);
+    cs.flipped += cs.state[f] == kFlipped;
+    cs.degenerate += cs.state[f] == kDegenerate || cs.state[f] == kForced;
+    cs.forced += cs.state[f] == kForced;
+    cs.thin += cs.state[f] == kThin;
+    if (cs.state[f] != kHealthy && cs.state[f] != kForced) cs.depth += std::max(0.0, options_.min_area_ratio - ratio);
+  }
+  mark_wound(x, cs);
+  return cs;
+}
+
+void ParametrizationProblem::Solver::dilate(std::vector<char>& in_region, int rings) const {
+  std::vector<int> frontier;
+  for (int f = 0; f < nf_; ++f)
+    if (in_region[f]) frontier.push_back(f);
+  for (int r = 0; r < rings && !frontier.empty(); ++r) {
+    std::vector<int> next;
+    for (int f : frontier)
       for (int k = 0; k < 3; ++k) {
-        const Vec2 a = ideal_[3 * g + (k + 1) % 3] - ideal_[3 * g + k];
-        const Vec2 b = ev.corner(x, 3 * g + (k + 1) % 3) - ev.corner(x, 3 * g + k);
-        re += a.dot(b);
-        im += cross2(a, b);
+        const int v = mesh_.F(f, k);
+        for (int i = vf_start_[v]; i < vf_start_[v + 1]; ++i)
+          if (!in_region[vf_[i]]) in_region[vf_[i]] = 1, next.push_back(vf_[i]);
       }
-      const double len = std::hypot(re, im);
-      return len > 0 ? Vec2(re / len, im / len) : Vec2(1, 0);
-    };
-    std::vector<Vec2> ref_rotation(nf, Vec2(1, 0));
-    {
-      std::vector<char> assigned(nf, 0);
-      std::vector<int> layer;
-      for (int f : faces)
-        if (cs.state[f] != kHealthy) {
-          // The global field-frame solve: the field's own frame (or the isoline's axis).
-          if (cs.field_frame) {
-            ref_rotation[f] = pinned_rotation[f].squaredNorm() > 0 ? pinned_rotation[f] : Vec2(1, 0);
-            assigned[f] = 1;
-            continue;
-          }
-          // An isoline edge fixes the rotation: its direction is exactly an axis. Wound faces
-          // always take their rotation from the healthy faces around their cluster.
-          const bool propagate = follow_neighbours || cs.wound[f];
-          if (pinned_rotation[f].squaredNorm() > 0) {
-            ref_rotation[f] = pinned_rotation[f];
-            assigned[f] = 1;
-          } else {
-            ref_rotation[f] = best_fit(f);
-            assigned[f] = !propagate;
-          }
-          if (!propagate) continue;
-          if (pinned_rotation[f].squaredNorm() > 0) layer.push_back(f);
-          for (int k = 0; k < 3; ++k) {
-            const int o = mesh_.opposite[3 * f + k];
-            if (o >= 0 && cs.state[o / 3] == kHealthy && !assigned[o / 3]) {
-              assigned[o / 3] = 1;
-              ref_rotation[o / 3] = best_fit(o / 3);
-              layer.push_back(o / 3);
-            }
-          }
-        }
-      while (!layer.empty()) {
-        std::vector<int> next;
-        for (int g : layer)
-          for (int k = 0; k < 3; ++k) {
-            const int o = mesh_.opposite[3 * g + k];
-            if (o < 0 || assigned[o / 3] || cs.state[o / 3] == kHealthy || cs.state[o / 3] == kForced) continue;
-            const int f = o / 3;
-            Vec2 sum = Vec2::Zero();
-            for (int j = 0; j < 3; ++j) {
-              const int p = mesh_.opposite[3 * f + j];
-              if (p >= 0 && assigned[p / 3]) sum += ref_rotation[p / 3];
-            }
-            if (sum.norm() > 0) ref_rotation[f] = sum.normalized();
-            assigned[f] = 1;
-            next.push_back(f);
-          }
-        layer.swap(next);
-      }
-    }
+    frontier.swap(next);
+  }
+}
 
-    SparseQP qp;
-    std::vector<Triplet> ht;
-    qp.linear.resize(n);
-    for (int j = 0; j < n; ++j) {
-      double fixed = 0;
-      for (SpMat::InnerIterator it(sys.Q, vars[j]); it; ++it) {
-        const int l = local[it.row()];
-        if (l >= 0) ht.emplace_back(l, j, 2 * it.value());
-        else fixed += it.value() * x[it.row()];
-      }
-      qp.linear[j] = 2 * (fixed - sys.c[vars[j]]);
-    }
-    qp.hessian.resize(n, n);
-    qp.hessian.setFromTriplets(ht.begin(), ht.end());
-    qp.start.resize(n);
-    for (int j = 0; j < n; ++j) qp.start[j] = x[vars[j]];
+// A flip-free map can still wind a one-ring a full turn off its cone (a valence-5 cone wound by
+// 90 degrees); the quads would then have a wrong irregular vertex there. Such vertices, with
+// rings around them until each cluster's turns cancel (up to 8 rings), become bad faces whose
+// references follow the field (never their own wound pose).
+void ParametrizationProblem::Solver::mark_wound(const Eigen::VectorXd& x, Census& cs) const {
+  cs.wound.assign(nf_, 0);
+  if (problem_.cone_quarter_turns_.empty() || !options_.winding_repair) return;
+  const std::vector<int> charge = problem_.winding_charges([&](int c) { return ev_.corner(x, c); });
+  const std::vector<int> defects = wound_vertices(charge, cs);
+  if (defects.empty()) return;
+  const std::vector<char> region = wound_region(defects, charge);
+  for (int f = 0; f < nf_; ++f) {
+    if (!region[f] || cs.state[f] == kForced) continue;
+    cs.wound[f] = 1;
+    if (cs.state[f] == kHealthy) cs.state[f] = kWound, ++cs.wound_faces;
+  }
+}
 
-    std::vector<Triplet> ct;
-    std::vector<double> lower;
-    std::vector<std::pair<int, double>> elastic;  // (row, cost per unit of violation)
-    int row = 0;
-    for (int f : faces) {
-      // Reference triangle: current pose if healthy, else the caller's pose if healthy there,
-      // else the ideal field-aligned shape.
-      Vec2 r[3];
-      bool have = false;
-      if (cs.state[f] == kHealthy) {
-        for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
-        have = true;
-      }
-      if (!have && options.reference && !cs.wound[f]) {
-        for (int k = 0; k < 3; ++k) r[k] = options.reference->corner(f, k);
-        const double area = 0.5 * cross2(r[1] - r[0], r[2] - r[0]);
-        have = orient2d_sign(r[0], r[1], r[2]) > 0 && area >= options.min_area_ratio * ideal_area_[f];
-      }
-      if (!have && strategy == kUnfold && !cs.wound[f]) {
-        // Move the vertex whose adjacent edges are no isolines and which is closest to the line
-        // of its opposite edge, to the positive side with a modest area.
-        for (int k = 0; k < 3; ++k) r[k] = ev.corner(x, 3 * f + k);
-        int best = -1;
-        double best_height = 0;
-        for (int k = 0; k < 3; ++k) {
-          if (iso_halfedge[3 * f + k] || iso_halfedge[3 * f + (k + 2) % 3]) continue;
-          const Vec2 d = r[(k + 2) % 3] - r[(k + 1) % 3];
-          if (!(d.norm() > 0)) continue;
-          const double height = std::abs(cross2(d, r[k] - r[(k + 1) % 3])) / d.norm();
-          if (best < 0 || height < best_height) best = k, best_height = height;
-        }
-        if (best >= 0) {
-          const Vec2 a = r[(best + 1) % 3], d = r[(best + 2) % 3] - a;
-          const double len = d.norm();
-          const Vec2 dir = d / len, left(-dir.y(), dir.x());
-          const double area = std::max(std::abs(0.5 * cross2(r[1] - r[0], r[2] - r[0])), 0.05 * ideal_area_[f]);
-          r[best] = a + (r[best] - a).dot(dir) * dir + (2 * area / len) * left;
-          have = orient2d_sign(r[0], r[1], r[2]) > 0;
-        }
-      }
-      if (!have) {
-        const Vec2 turn = ref_rotation[f];
-        const double re = turn.x(), im = turn.y();
-        const double angle = (re == 0 && im == 0) ? 0.0 : std::atan2(im, re);
-        const double cs = std::cos(angle), sn = std::sin(angle);
-        for (int k = 0; k < 3; ++k) {
-          const Vec2 q = ideal_[3 * f + k];
-          r[k] = Vec2(cs * q.x() - sn * q.y(), sn * q.x() + cs * q.y());
-        }
-      }
-      const double ideal_len =
-          ((ideal_[3 * f + 1] - ideal_[3 * f]).norm() + (ideal_[3 * f + 2] - ideal_[3 * f + 1]).norm() +
-           (ideal_[3 * f] - ideal_[3 * f + 2]).norm()) / 3;
-      Vec2 dir[3], bound[3];
-      for (int k = 0; k < 3; ++k) dir[k] = (r[(k + 1) % 3] - r[k]).normalized();
-      for (int k = 0; k < 3; ++k) {  // bisector between edge k-1 and edge k
-        const Vec2& a = dir[(k + 2) % 3];
-        const double turn = std::atan2(cross2(a, dir[k]), a.dot(dir[k]));  // in (0, pi)
-        const double half = 0.5 * turn;
-        bound[k] = Vec2(a.x() * std::cos(half) - a.y() * std::sin(half), a.x() * std::sin(half) + a.y() * std::cos(half));
-      }
+std::vector<int> ParametrizationProblem::Solver::wound_vertices(const std::vector<int>& charge,
+                                                                const Census& cs) const {
+  std::vector<int> defects;
+  for (int v = 0; v < mesh_.num_vertices(); ++v) {
+    if (charge[v] == 0 || vf_start_[v] == vf_start_[v + 1]) continue;
+    bool clean = true;  // angles next to flipped faces say little; the global pass handles those
+    for (int i = vf_start_[v]; i < vf_start_[v + 1] && clean; ++i)
+      clean = cs.state[vf_[i]] == kHealthy || cs.state[vf_[i]] == kThin;
+    if (clean) defects.push_back(v);
+  }
+  return defects;
+}
+
+std::vector<char> ParametrizationProblem::Solver::wound_region(const std::vector<int>& defects,
+                                                               const std::vector<int>& charge) const {
+  std::vector<char> region(nf_, 0);
+  for (int v : defects)
+    for (int i = vf_start_[v]; i < vf_start_[v + 1]; ++i) region[vf_[i]] = 1;
+  dilate(region, 1);
+  for (int grow = 0; grow < 8; ++grow) {
+    // Connected parts of the region (faces sharing a vertex) and their total turns.
+    int num_parts = 0;
+    const std::vector<int> part = region_parts(region, &num_parts);
+    std::vector<int> turns(num_parts, 0);
+    for (int v : defects) turns[part[vf_[vf_start_[v]]]] += charge[v];
+    std::vector<char> seed(nf_, 0);
+    bool any = false;
+    for (int f = 0; f < nf_; ++f)
+      if (region[f] && turns[part[f]] != 0) seed[f] = 1, any = true;
+    if (!any) break;
+    dilate(seed, 1);
+    for (int f = 0; f < nf_; ++f) region[f] = region[f] || seed[f];
+  }
+  return region;
+}
+
+std::vector<int> ParametrizationProblem::Solver::region_parts(const std::vector<char>& region, int* count) const {
+  std::vector<int> part(nf_, -1);
+  *count = 0;
+  for (int f0 = 0; f0 < nf_; ++f0) {
+    if (!region[f0] || part[f0] >= 0) continue;
+    const int id = (*count)++;
+    std::vector<int> stack{f0};
+    part[f0] = id;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
       for (int k = 0; k < 3; ++k) {
-        const Vec2 e = r[(k + 1) % 3] - r[k];
-        // cross(bound_k, e) >= m and cross(e, bound_{k+1}) >= m; in terms of e: n . e >= m.
-        const Vec2 normals[2] = {Vec2(-bound[k].y(), bound[k].x()),
-                                 Vec2(bound[(k + 1) % 3].y(), -bound[(k + 1) % 3].x())};
-        for (const Vec2& nrm : normals) {
-          const double ref_value = nrm.dot(e);
-          const double margin = std::min(options.margin * ideal_len, 0.5 * std::max(ref_value, 0.0));
-          double bound_value = margin;
-          const int ca = 3 * f + (k + 1) % 3, cb = 3 * f + k;  // e = p(ca) - p(cb)
-          for (int a = 0; a < 2; ++a)
-            for (int side = 0; side < 2; ++side) {
-              const int v = ev.var(side == 0 ? ca : cb, a);
-              const double s = (side == 0 ? 1.0 : -1.0) * nrm[a];
-              bound_value -= s * sys.form_const[v];
-              for (int i = sys.form_start[v]; i < sys.form_start[v + 1]; ++i) {
-                const int gv = sys.form_var[i];
-                if (local[gv] >= 0) ct.emplace_back(row, local[gv], s * sys.form_coeff[i]);
-                else bound_value -= s * sys.form_coeff[i] * x[gv];
-              }
-            }
-          lower.push_back(bound_value);
-          // Faces without a valid reference of their own may violate their sectors at a
-          // (large) cost, so that the problem stays feasible; re-linearization continues.
-          if (cs.state[f] != kHealthy || strategy == kAllElastic) elastic.push_back({row, options.elastic_weight * ideal_len});
-          ++row;
-        }
-      }
-    }
-    const int ns = static_cast<int>(elastic.size());
-    if (ns > 0) {
-      // Slack s >= 0 per elastic row: a.x + s >= lower, cost weight * s.
-      qp.hessian.conservativeResize(n + ns, n + ns);
-      qp.linear.conservativeResize(n + ns);
-      qp.start.conservativeResize(n + ns);
-      qp.variable_lower = Eigen::VectorXd::Constant(n + ns, -2e19);
-      for (int j = 0; j < ns; ++j) {
-        ct.emplace_back(elastic[j].first, n + j, 1.0);
-        qp.linear[n + j] = elastic[j].second;
-        qp.variable_lower[n + j] = 0;
-      }
-    }
-    qp.constraints.resize(row, n + ns);
-    qp.constraints.setFromTriplets(ct.begin(), ct.end());
-    qp.lower = Eigen::Map<Eigen::VectorXd>(lower.data(), row);
-    if (ns > 0) {
-      const Eigen::VectorXd value = qp.constraints.leftCols(n) * qp.start.head(n);
-      for (int j = 0; j < ns; ++j) {
-        const int r = elastic[j].first;
-        qp.start[n + j] = std::max(0.0, qp.lower[r] - value[r]);
-      }
-    }
-
-    QPOptions qo;
-    qo.max_iterations = options.max_ipopt_iterations;
-    qo.tolerance = options.ipopt_tolerance;
-    qo.progress_begin = pb;
-    qo.progress_end = pe;
-    Timer t;
-    const QPResult res = solve_qp(qp, qo, progress);
-    st.seconds_ipopt += t.seconds();
-    ++st.ipopt_solves;
-    st.ipopt_iterations += res.iterations;
-    *status = res.status;
-    Eigen::VectorXd y = x;
-    if (res.status != QPResult::Status::Failed && res.x.size() == n + ns && res.x.allFinite())
-      for (int j = 0; j < n; ++j) y[vars[j]] = res.x[j];
-    return y;
-  };
-
-  const double pb = options.progress_begin, span = options.progress_end - options.progress_begin;
-  // Active set: the variables of a region around the bad faces move; the bad faces and one ring
-  // around them are constrained. Faces that turn bad outside the constrained set join it.
-  auto is_bad = [](char state) { return state != kHealthy && state != kForced; };
-  std::vector<char> region(nf, 0), active(nf, 0);
-  auto add_bad = [&](const Census& cs, std::vector<char>& set, int rings, const std::vector<char>* only_outside) {
-    std::vector<char> seed(nf, 0);
-    for (int f = 0; f < nf; ++f) seed[f] = is_bad(cs.state[f]) && (!only_outside || !(*only_outside)[f]);
-    dilate(seed, rings);
-    for (int f = 0; f < nf; ++f) set[f] = set[f] || seed[f];
-  };
-  const bool repair = options.regularity != RegularityMode::Off &&
-                      (options.regularity == RegularityMode::AllFaces || current.bad() > 0);
-  if (repair) {
-    // Per-face ring count: starts at ring_size and doubles (up to max_ring_size) each round the
-    // face is still bad, so that only stubborn clusters get large regions.
-    const int first_rings = std::max(0, options.ring_size);
-    const int max_rings = std::max(options.max_ring_size, first_rings);
-    std::vector<int> rings(nf, 0);
-    auto grow_region = [&]() {
-      region.assign(nf, 0);
-      std::vector<int> levels;
-      for (int f = 0; f < nf; ++f)
-        if (is_bad(current.state[f])) levels.push_back(rings[f]);
-      std::sort(levels.begin(), levels.end());
-      levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-      for (int level : levels) {
-        std::vector<char> seed(nf, 0);
-        for (int f = 0; f < nf; ++f) seed[f] = is_bad(current.state[f]) && rings[f] == level;
-        dilate(seed, level);
-        for (int f = 0; f < nf; ++f) region[f] = region[f] || seed[f];
-      }
-    };
-    const int rounds = std::max(1, options.max_repair_rounds);
-    std::vector<char> touched(nf, 0);  // faces that were bad at some point
-    for (int pass = 0; pass < 2; ++pass) {
-      if (pass == 1) {
-        // The local repair left bad faces (typically a flip next to a wound vertex, which no local
-        // region can unwind): one global solve with every face held in the sectors of its ideal
-        // shape in the field's frame (Bommes et al. 2013), elastically; then local repair again.
-        if (current.bad() == 0 || cone_quarter_turns_.empty() || options.regularity == RegularityMode::AllFaces ||
-            !options.winding_repair)
-          break;
-        Census all = current;
-        all.field_frame = true;
-        for (int f = 0; f < nf; ++f)
-          if (all.state[f] == kHealthy) all.state[f] = kWound;
-        const std::vector<char> every(nf, 1);
-        QPResult::Status status;
-        const double t0 = 0.3 + 0.5 * std::min(st.repair_rounds, rounds - 1) / rounds;
-        const Eigen::VectorXd y = solve_region(every, every, z, all, kPropagated, pb + span * t0,
-                                               pb + span * (t0 + 0.5 / rounds), &status);
-        ++st.field_frame_solves;
-        Census next = census(y);
-        if (!(next.bad() < current.bad())) break;
-        z = y;
-        current = std::move(next);
-        rings.assign(nf, 0);
-        active.assign(nf, 1);  // every face the repair's variables reach stays constrained
-        if (current.bad() == 0) break;
-      }
-      for (int f = 0; f < nf; ++f)
-        if (is_bad(current.state[f])) rings[f] = first_rings;
-      if (options.regularity == RegularityMode::AllFaces) {
-        region.assign(nf, 1);
-        active.assign(nf, 1);
-      } else {
-        grow_region();
-        add_bad(current, active, 1, nullptr);
-      }
-      for (int f = 0; f < nf; ++f) touched[f] = touched[f] || is_bad(current.state[f]);
-      int rejected = 0, best_round = -1;
-      Census best = current;  // the best pose seen (fewest bad faces, then least depth)
-      Eigen::VectorXd best_z = z;
-      // After the global solve, the local repair gets half the rounds again.
-      const int pass_rounds = pass == 0 ? rounds : std::max(1, rounds / 2);
-      for (int round = 0; round < pass_rounds; ++round) {
-        ++st.repair_rounds;
-        QPResult::Status status;
-        const double t0 = 0.3 + 0.5 * std::min(st.repair_rounds - 1, rounds - 1) / rounds;
-        // The strategies take turns (a rejected round leaves the pose unchanged).
-        static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
-        const int strategy = kOrder[round % 4];
-        const Eigen::VectorXd y = solve_region(region, active, z, current, strategy, pb + span * t0,
-                                               pb + span * (t0 + 0.5 / rounds), &status);
-        Census next = census(y);
-        bool escaped = false;
-        for (int f = 0; f < nf && !escaped; ++f) escaped = is_bad(next.state[f]) && !active[f];
-        if (escaped) {
-          // Unconstrained faces went bad: they are constrained from now on. The new pose is kept
-          // only if it is better anyway.
-          for (int f = 0; f < nf; ++f)
-            if (is_bad(next.state[f]) && !active[f]) {
-              touched[f] = 1;
-              if (rings[f] == 0) rings[f] = first_rings;
-            }
-          add_bad(next, active, 1, &active);
-          if (!(next.bad() < current.bad() && next.depth < current.depth)) {
-            add_bad(next, region, first_rings, nullptr);
-            continue;
-          }
-        }
-        // Keep the new pose when it has fewer bad faces or they are less bad.
-        const bool accepted = next.bad() < current.bad() || next.depth < current.depth;
-        if (accepted) {
-          z = y;
-          current = std::move(next);
-          rejected = 0;
-          if (current.bad() < best.bad() || (current.bad() == best.bad() && current.depth < best.depth)) {
-            best = current;
-            best_z = z;
-            best_round = round;
-          }
-        } else if (++rejected >= 4) {
-          break;  // no strategy makes progress: a fixed point
-        }
-        if (current.bad() == 0) break;
-        if (round - best_round >= options.stagnation_rounds) break;  // no new best for a while
-        // Faces still bad get wider rings; faces fixed earlier stay constrained.
-        for (int f = 0; f < nf; ++f)
-          if (is_bad(current.state[f])) {
-            rings[f] = rings[f] == 0 ? first_rings : std::min(std::max(1, 2 * rings[f]), max_rings);
-            touched[f] = 1;
-          }
-        if (options.regularity != RegularityMode::AllFaces) grow_region();
-        add_bad(current, active, 1, nullptr);
-      }
-      z = best_z;
-      current = best;
-    }
-    // Re-linearize around the faces that were repaired.
-    if (options.regularity != RegularityMode::AllFaces) {
-      region = touched;
-      dilate(region, std::max(0, options.ring_size));
-    }
-    // Re-linearization around the regular pose (paper §7.1): lowers the energy within the
-    // region while every constraint set contains the current pose.
-    if (current.bad() == 0 && options.relinearization_rounds > 0) {
-      double value = objective(z);
-      for (int round = 0; round < options.relinearization_rounds; ++round) {
-        QPResult::Status status;
-        const double t0 = 0.8 + 0.2 * round / options.relinearization_rounds;
-        const Eigen::VectorXd y = solve_region(region, active, z, current, 0, pb + span * t0,
-                                               pb + span * (t0 + 0.2 / options.relinearization_rounds), &status);
-        Census next = census(y);
-        const double next_value = objective(y);
-        if (next.bad() > 0 || !(next_value < value)) break;
-        ++st.relinearizations;
-        const double drop = (value - next_value) / std::max(value, 1e-300);
-        z = y;
-        current = std::move(next);
-        value = next_value;
-        if (drop < options.relinearization_tolerance) break;
+        const int v = mesh_.F(f, k);
+        for (int i = vf_start_[v]; i < vf_start_[v + 1]; ++i)
+          if (region[vf_[i]] && part[vf_[i]] < 0) part[vf_[i]] = id, stack.push_back(vf_[i]);
       }
     }
   }
-  report(1.0);
+  return part;
+}
 
-  // Output.
-  Parametrization& p = out.param;
-  p.uv.resize(nc, 2);
-  for (int c = 0; c < nc; ++c) p.uv.row(c) = ev.corner(z, c).transpose();
-  p.rotation = rotation_;
-  p.is_cut = is_cut_;
-  st.flipped = current.flipped;
-  st.degenerate = current.degenerate;
-  st.winding_defects = winding_defects(p);
-  st.thin = current.thin;
-  st.min_area_ratio = current.min_ratio;
-  st.energy = field_energy(p);
-  st.constraint_violation = constraint_violation(p);
+bool ParametrizationProblem::Solver::needs_repair(const Census& initial) const {
+  return options_.regularity != RegularityMode::Off &&
+         (options_.regularity == RegularityMode::AllFaces || initial.bad() > 0);
+}
+
+void ParametrizationProblem::Solver::repair() {
+  // Per-face ring count: starts at ring_size and doubles (up to max_ring_size) each round the
+  // face is still bad, so that only stubborn clusters get large regions.
+  first_rings_ = std::max(0, options_.ring_size);
+  max_rings_ = std::max(options_.max_ring_size, first_rings_);
+  rings_.assign(nf_, 0);
+  rounds_ = std::max(1, options_.max_repair_rounds);
+  touched_.assign(nf_, 0);
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1 && !field_frame_solve()) break;
+    // After the global solve, the local repair gets half the rounds again.
+    local_repair(pass == 0 ? rounds_ : std::max(1, rounds_ / 2));
+  }
+  // Re-linearize around the faces that were repaired.
+  if (options_.regularity != RegularityMode::AllFaces) {
+    region_ = touched_;
+    dilate(region_, std::max(0, options_.ring_size));
+  }
+  relinearize();
+}
+
+// The local repair left bad faces (typically a flip next to a wound vertex, which no local
+// region can unwind): one global solve with every face held in the sectors of its ideal shape in
+// the field's frame (Bommes et al. 2013), elastically; then local repair again.
+bool ParametrizationProblem::Solver::field_frame_solve() {
+  if (current_.bad() == 0 || problem_.cone_quarter_turns_.empty() ||
+      options_.regularity == RegularityMode::AllFaces || !options_.winding_repair)
+    return false;
+  Census all = current_;
+  all.field_frame = true;
+  for (int f = 0; f < nf_; ++f)
+    if (all.state[f] == kHealthy) all.state[f] = kWound;
+  const std::vector<char> every(nf_, 1);
+  QPResult::Status status;
+  const double t0 = 0.3 + 0.5 * std::min(st_.repair_rounds, rounds_ - 1) / rounds_;
+  const Eigen::VectorXd y = solve_region(every, every, z_, all, kPropagated, pb_ + span_ * t0,
+                                         pb_ + span_ * (t0 + 0.5 / rounds_), &status);
+  ++st_.field_frame_solves;
+  Census next = census(y);
+  if (!(next.bad() < current_.bad())) return false;
+  z_ = y;
+  current_ = std::move(next);
+  rings_.assign(nf_, 0);
+  active_.assign(nf_, 1);  // every face the repair's variables reach stays constrained
+  return current_.bad() != 0;
+}
+
+void ParametrizationProblem::Solver::local_repair(int max_rounds) {
+  for (int f = 0; f < nf_; ++f)
+    if (is_bad(current_.state[f])) rings_[f] = first_rings_;
+  if (options_.regularity == RegularityMode::AllFaces) {
+    region_.assign(nf_, 1);
+    active_.assign(nf_, 1);
+  } else {
+    grow_region();
+    add_bad(current_, active_, 1, nullptr);
+  }
+  for (int f = 0; f < nf_; ++f) touched_[f] = touched_[f] || is_bad(current_.state[f]);
+  RepairTrack track{current_, z_};
+  for (int round = 0; round < max_rounds; ++round)
+    if (!repair_round(round, track)) break;
+  z_ = track.best_z;
+  current_ = track.best;
+}
+
+bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track) {
+  ++st_.repair_rounds;
+  QPResult::Status status;
+  const double t0 = 0.3 + 0.5 * std::min(st_.repair_rounds - 1, rounds_ - 1) / rounds_;
+  // The strategies take turns (a rejected round leaves the pose unchanged).
+  static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
+  const int strategy = kOrder[round % 4];
+  const Eigen::VectorXd y = solve_region(region_, active_, z_, current_, strategy, pb_ + span_ * t0,
+                                         pb_ + span_ * (t0 + 0.5 / rounds_), &status);
+  Census next = census(y);
+  if (reject_escaped(next)) return true;
+  // Keep the new pose when it has fewer bad faces or they are less bad.
+  const bool accepted = next.bad() < current_.bad() || next.depth < current_.depth;
+  if (accepted) {
+    z_ = y;
+    current_ = std::move(next);
+    track.rejected = 0;
+    if (current_.bad() < track.best.bad() || (current_.bad() == track.best.bad() && current_.depth < track.best.depth)) {
+      track.best = current_;
+      track.best_z = z_;
+      track.best_round = round;
+    }
+  } else if (++track.rejected >= 4) {
+    return false;  // no strategy makes progress: a fixed point
+  }
+  if (current_.bad() == 0) return false;
+  if (round - track.best_round >= options_.stagnation_rounds) return false;  // no new best for a while
+  widen_rings();
+  return true;
+}
+
+bool ParametrizationProblem::Solver::reject_escaped(const Census& next) {
+  bool escaped = false;
+  for (int f = 0; f < nf_ && !escaped; ++f) escaped = is_bad(next.state[f]) && !active_[f];
+  if (!escaped) return false;
+  // Unconstrained faces went bad: they are constrained from now on. The new pose is kept only if
+  // it is better anyway.
+  for (int f = 0; f < nf_; ++f)
+    if (is_bad(next.state[f]) && !active_[f]) {
+      touched_[f] = 1;
+      if (rings_[f] == 0) rings_[f] = first_rings_;
+    }
+  add_bad(next, active_, 1, &active_);
+  if (next.bad() < current_.bad() && next.depth < current_.depth) return false;
+  add_bad(next, region_, first_rings_, nullptr);
+  return true;
+}
+
+void ParametrizationProblem::Solver::widen_rings() {
+  // Faces still bad get wider rings; faces fixed earlier stay constrained.
+  for (int f = 0; f < nf_; ++f)
+    if (is_bad(current_.state[f])) {
+      rings_[f] = rings_[f] == 0 ? first_rings_ : std::min(std::max(1, 2 * rings_[f]), max_rings_);
+      touched_[f] = 1;
+    }
+  if (options_.regularity != RegularityMode::AllFaces) grow_region();
+  add_bad(current_, active_, 1, nullptr);
+}
+
+void ParametrizationProblem::Solver::grow_region() {
+  region_.assign(nf_, 0);
+  std::vector<int> levels;
+  for (int f = 0; f < nf_; ++f)
+    if (is_bad(current_.state[f])) levels.push_back(rings_[f]);
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  for (int level : levels) {
+    std::vector<char> seed(nf_, 0);
+    for (int f = 0; f < nf_; ++f) seed[f] = is_bad(current_.state[f]) && rings_[f] == level;
+    dilate(seed, level);
+    for (int f = 0; f < nf_; ++f) region_[f] = region_[f] || seed[f];
+  }
+}
+
+void ParametrizationProblem::Solver::add_bad(const Census& cs, std::vector<char>& set, int rings,
+                                             const std::vector<char>* only_outside) const {
+  std::vector<char> seed(nf_, 0);
+  for (int f = 0; f < nf_; ++f) seed[f] = is_bad(cs.state[f]) && (!only_outside || !(*only_outside)[f]);
+  dilate(seed, rings);
+  for (int f = 0; f < nf_; ++f) set[f] = set[f] || seed[f];
+}
+
+// Re-linearization around the regular pose (paper §7.1): lowers the energy within the region
+// while every constraint set contains the current pose.
+void ParametrizationProblem::Solver::relinearize() {
+  if (current_.bad() != 0 || options_.relinearization_rounds <= 0) return;
+  double value = objective(z_);
+  for (int round = 0; round < options_.relinearization_rounds; ++round) {
+    QPResult::Status status;
+    const double t0 = 0.8 + 0.2 * round / options_.relinearization_rounds;
+    // Every constrained face is healthy here: the strategy (for bad faces) plays no part.
+    const Eigen::VectorXd y = solve_region(region_, active_, z_, current_, kUnfold, pb_ + span_ * t0,
+                                           pb_ + span_ * (t0 + 0.2 / options_.relinearization_rounds), &status);
+    Census next = census(y);
+    const double next_value = objective(y);
+    if (next.bad() > 0 || !(next_value < value)) break;
+    ++st_.relinearizations;
+    const double drop = (value - next_value) / std::max(value, 1e-300);
+    z_ = y;
+    current_ = std::move(next);
+    value = next_value;
+    if (drop < options_.relinearization_tolerance) break;
+  }
+}
+
+// One Ipopt solve over the variables of the region's corners; every face those variables reach
+// gets tri-sector constraints linearized around its reference triangle (see RepairStrategy).
+Eigen::VectorXd ParametrizationProblem::Solver::solve_region(const std::vector<char>& in_region,
+                                                             const std::vector<char>& active,
+                                                             const Eigen::VectorXd& x, const Census& cs,
+                                                             int strategy, double pb, double pe,
+                                                             QPResult::Status* status) {
+  const bool follow_neighbours = strategy == kPropagated || strategy == kAllElastic;
+  RegionQP rq = select_region(in_region, active);
+  const std::vector<Vec2> ref_rotation = reference_rotations(rq.faces, x, cs, follow_neighbours);
+  add_objective(rq, x);
+  for (int f : rq.faces) {
+    Vec2 r[3];
+    reference_triangle(f, x, cs, strategy, ref_rotation[f], r);
+    add_sector_constraints(f, r, x, cs, strategy, rq);
+  }
+  finish_constraints(rq);
+  return run_ipopt(rq, x, pb, pe, status);
+}
+
+RegionQP ParametrizationProblem::Solver::select_region(const std::vector<char>& in_region,
+                                                       const std::vector<char>& active) {
+  // Variables used only by region faces move; the active faces they reach are constrained.
+  RegionQP rq;
+  rq.local.assign(sys_.num_free, -1);
+  for (int v = 0; v < sys_.num_free; ++v) {
+    bool inside = sys_.var_face_start[v] < sys_.var_face_start[v + 1];
+    for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1] && inside; ++i)
+      inside = in_region[sys_.var_face[i]];
+    if (inside) rq.local[v] = static_cast<int>(rq.vars.size()), rq.vars.push_back(v);
+  }
+  std::vector<char> constrained(nf_, 0);
+  for (int v : rq.vars)
+    for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1]; ++i) {
+      const int f = sys_.var_face[i];
+      if (active[f] && !constrained[f] && !sys_.forced_degenerate[f]) constrained[f] = 1, rq.faces.push_back(f);
+    }
+  st_.max_region_faces = std::max(st_.max_region_faces, static_cast<int>(rq.faces.size()));
+  st_.max_qp_variables = std::max(st_.max_qp_variables, static_cast<int>(rq.vars.size()));
+  return rq;
+}
+
+Vec2 ParametrizationProblem::Solver::best_fit(const Eigen::VectorXd& x, int g) const {
+  double re = 0, im = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec2 a = ideal_[3 * g + (k + 1) % 3] - ideal_[3 * g + k];
+    const Vec2 b = ev_.corner(x, 3 * g + (k + 1) % 3) - ev_.corner(x, 3 * g + k);
+    re += a.dot(b);
+    im += cross2(a, b);
+  }
+  const double len = std::hypot(re, im);
+  return len > 0 ? Vec2(re / len, im / len) : Vec2(1, 0);
+}
+
+// Faces without a valid reference use their ideal (isometric, field-aligned) shape rotated by the
+// best-fit rotation of ideal onto current shape: their own, or (follow_neighbours) one propagated
+// inward from the healthy faces around each bad cluster, so that adjacent bad faces agree. A
+// rotation relative to the field is the same in every chart (rotations commute with the
+// transitions), so it is carried across cuts unchanged.
+std::vector<Vec2> ParametrizationProblem::Solver::reference_rotations(const std::vector<int>& faces,
+                                                                      const Eigen::VectorXd& x, const Census& cs,
+                                                                      bool follow_neighbours) const {
+  ReferenceRotations rr;
+  rr.rotation.assign(nf_, Vec2(1, 0));
+  rr.assigned.assign(nf_, 0);
+  for (int f : faces)
+    if (cs.state[f] != kHealthy) seed_rotation(f, x, cs, follow_neighbours, rr);
+  propagate_rotations(cs, rr);
+  return std::move(rr.rotation);
+}
+
+void ParametrizationProblem::Solver::seed_rotation(int f, const Eigen::VectorXd& x, const Census& cs,
+                                                   bool follow_neighbours, ReferenceRotations& rr) const {
+  const Vec2& pinned = pinned_rotation_[f];
+  // The global field-frame solve: the field's own frame (or the isoline's axis).
+  if (cs.field_frame) {
+    rr.rotation[f] = pinned.squaredNorm() > 0 ? pinned : Vec2(1, 0);
+    rr.assigned[f] = 1;
+    return;
+  }
+  // An isoline edge fixes the rotation: its direction is exactly an axis. Wound faces always
+  // take their rotation from the healthy faces around their cluster.
+  const bool propagate = follow_neighbours || cs.wound[f];
+  if (pinned.squaredNorm() > 0) {
+    rr.rotation[f] = pinned;
+    rr.assigned[f] = 1;
+  } else {
+    rr.rotation[f] = best_fit(x, f);
+    rr.assigned[f] = !propagate;
+  }
+  if (!propagate) return;
+  if (pinned.squaredNorm() > 0) rr.layer.push_back(f);
+  for (int k = 0; k < 3; ++k) {
+    const int o = mesh_.opposite[3 * f + k];
+    if (o >= 0 && cs.state[o / 3] == kHealthy && !rr.assigned[o / 3]) {
+      rr.assigned[o / 3] = 1;
+      rr.rotation[o / 3] = best_fit(x, o / 3);
+      rr.layer.push_back(o / 3);
+    }
+  }
+}
+
+void ParametrizationProblem::Solver::propagate_rotations(const Census& cs, ReferenceRotations& rr) const {
+  while (!rr.layer.empty()) {
+    std::vector<int> next;
+    for (int g : rr.layer)
+      for (int k = 0; k < 3; ++k) {
+        const int o = mesh_.opposite[3 * g + k];
+        if (o < 0 || rr.assigned[o / 3] || cs.state[o / 3] == kHealthy || cs.state[o / 3] == kForced) continue;
+        const int f = o / 3;
+        Vec2 sum = Vec2::Zero();
+        for (int j = 0; j < 3; ++j) {
+          const int p = mesh_.opposite[3 * f + j];
+          if (p >= 0 && rr.assigned[p / 3]) sum += rr.rotation[p / 3];
+        }
+        if (sum.norm() > 0) rr.rotation[f] = sum.normalized();
+        rr.assigned[f] = 1;
+        next.push_back(f);
+      }
+    rr.layer.swap(next);
+  }
+}
+
+void ParametrizationProblem::Solver::add_objective(RegionQP& rq, const Eigen::VectorXd& x) const {
+  const int n = static_cast<int>(rq.vars.size());
+  SparseQP& qp = rq.qp;
+  std::vector<Triplet> ht;
+  qp.linear.resize(n);
+  for (int j = 0; j < n; ++j) {
+    double fixed = 0;
+    for (SpMat::InnerIterator it(sys_.Q, rq.vars[j]); it; ++it) {
+      const int l = rq.local[it.row()];
+      if (l >= 0) ht.emplace_back(l, j, 2 * it.value());
+      else fixed += it.value() * x[it.row()];
+    }
+    qp.linear[j] = 2 * (fixed - sys_.c[rq.vars[j]]);
+  }
+  qp.hessian.resize(n, n);
+  qp.hessian.setFromTriplets(ht.begin(), ht.end());
+  qp.start.resize(n);
+  for (int j = 0; j < n; ++j) qp.start[j] = x[rq.vars[j]];
+}
+
+// Current pose if healthy, else the caller's pose if healthy there, else (kUnfold) the current
+// pose unfolded, else the ideal field-aligned shape rotated by `rotation`.
+void ParametrizationProblem::Solver::reference_triangle(int f, const Eigen::VectorXd& x, const Census& cs,
+                                                        int strategy, const Vec2& rotation, Vec2 r[3]) const {
+  if (cs.state[f] == kHealthy) {
+    for (int k = 0; k < 3; ++k) r[k] = ev_.corner(x, 3 * f + k);
+    return;
+  }
+  if (options_.reference && !cs.wound[f] && caller_reference(f, r)) return;
+  if (strategy == kUnfold && !cs.wound[f] && unfolded_reference(f, x, r)) return;
+  rotated_ideal(f, rotation, r);
+}
+
+bool ParametrizationProblem::Solver::caller_reference(int f, Vec2 r[3]) const {
+  for (int k = 0; k < 3; ++k) r[k] = options_.reference->corner(f, k);
+  const double area = 0.5 * cross2(r[1] - r[0], r[2] - r[0]);
+  return orient2d_sign(r[0], r[1], r[2]) > 0 && area >= options_.min_area_ratio * ideal_area_[f];
+}
+
+bool ParametrizationProblem::Solver::unfolded_reference(int f, const Eigen::VectorXd& x, Vec2 r[3]) const {
+  // Move the vertex whose adjacent edges are no isolines and which is closest to the line of its
+  // opposite edge, to the positive side with a modest area.
+  for (int k = 0; k < 3; ++k) r[k] = ev_.corner(x, 3 * f + k);
+  int best = -1;
+  double best_height = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (iso_halfedge_[3 * f + k] || iso_halfedge_[3 * f + (k + 2) % 3]) continue;
+    const Vec2 d = r[(k + 2) % 3] - r[(k + 1) % 3];
+    if (!(d.norm() > 0)) continue;
+    const double height = std::abs(cross2(d, r[k] - r[(k + 1) % 3])) / d.norm();
+    if (best < 0 || height < best_height) best = k, best_height = height;
+  }
+  if (best < 0) return false;
+  const Vec2 a = r[(best + 1) % 3], d = r[(best + 2) % 3] - a;
+  const double len = d.norm();
+  const Vec2 dir = d / len, left(-dir.y(), dir.x());
+  const double area = std::max(std::abs(0.5 * cross2(r[1] - r[0], r[2] - r[0])), 0.05 * ideal_area_[f]);
+  r[best] = a + (r[best] - a).dot(dir) * dir + (2 * area / len) * left;
+  return orient2d_sign(r[0], r[1], r[2]) > 0;
+}
+
+void ParametrizationProblem::Solver::rotated_ideal(int f, const Vec2& rotation, Vec2 r[3]) const {
+  const double re = rotation.x(), im = rotation.y();
+  const double angle = (re == 0 && im == 0) ? 0.0 : std::atan2(im, re);
+  const double cosine = std::cos(angle), sine = std::sin(angle);
+  for (int k = 0; k < 3; ++k) {
+    const Vec2 q = ideal_[3 * f + k];
+    r[k] = Vec2(cosine * q.x() - sine * q.y(), sine * q.x() + cosine * q.y());
+  }
+}
+
+void ParametrizationProblem::Solver::add_sector_constraints(int f, const Vec2 r[3], const Eigen::VectorXd& x,
+                                                            const Census& cs, int strategy, RegionQP& rq) const {
+  const double ideal_len =
+      ((ideal_[3 * f + 1] - ideal_[3 * f]).norm() + (ideal_[3 * f + 2] - ideal_[3 * f + 1]).norm() +
+       (ideal_[3 * f] - ideal_[3 * f + 2]).norm()) / 3;
+  Vec2 bound[3];
+  sector_bisectors(r, bound);
+  for (int k = 0; k < 3; ++k) {
+    const Vec2 e = r[(k + 1) % 3] - r[k];
+    // cross(bound_k, e) >= m and cross(e, bound_{k+1}) >= m; in terms of e: n . e >= m.
+    const Vec2 normals[2] = {Vec2(-bound[k].y(), bound[k].x()), Vec2(bound[(k + 1) % 3].y(), -bound[(k + 1) % 3].x())};
+    for (const Vec2& nrm : normals) {
+      const double ref_value = nrm.dot(e);
+      const double margin = std::min(options_.margin * ideal_len, 0.5 * std::max(ref_value, 0.0));
+      double bound_value = margin;
+      const int ca = 3 * f + (k + 1) % 3, cb = 3 * f + k;  // e = p(ca) - p(cb)
+      for (int a = 0; a < 2; ++a)
+        for (int side = 0; side < 2; ++side) {
+          const int v = ev_.var(side == 0 ? ca : cb, a);
+          const double s = (side == 0 ? 1.0 : -1.0) * nrm[a];
+          bound_value -= s * sys_.form_const[v];
+          for (int i = sys_.form_start[v]; i < sys_.form_start[v + 1]; ++i) {
+            const int gv = sys_.form_var[i];
+            if (rq.local[gv] >= 0) rq.ct.emplace_back(rq.rows, rq.local[gv], s * sys_.form_coeff[i]);
+            else bound_value -= s * sys_.form_coeff[i] * x[gv];
+          }
+        }
+      rq.lower.push_back(bound_value);
+      // Faces without a valid reference of their own may violate their sectors at a (large) cost,
+      // so that the problem stays feasible; re-linearization continues.
+      if (cs.state[f] != kHealthy || strategy == kAllElastic)
+        rq.elastic.push_back({rq.rows, options_.elastic_weight * ideal_len});
+      ++rq.rows;
+    }
+  }
+}
+
+void ParametrizationProblem::Solver::finish_constraints(RegionQP& rq) const {
+  const int n = static_cast<int>(rq.vars.size()), ns = static_cast<int>(rq.elastic.size());
+  SparseQP& qp = rq.qp;
+  if (ns > 0) {
+    // Slack s >= 0 per elastic row: a.x + s >= lower, cost weight * s.
+    qp.hessian.conservativeResize(n + ns, n + ns);
+    qp.linear.conservativeResize(n + ns);
+    qp.start.conservativeResize(n + ns);
+    qp.variable_lower = Eigen::VectorXd::Constant(n + ns, -2e19);
+    for (int j = 0; j < ns; ++j) {
+      rq.ct.emplace_back(rq.elastic[j].first, n + j, 1.0);
+      qp.linear[n + j] = rq.elastic[j].second;
+      qp.variable_lower[n + j] = 0;
+    }
+  }
+  qp.constraints.resize(rq.rows, n + ns);
+  qp.constraints.setFromTriplets(rq.ct.begin(), rq.ct.end());
+  qp.lower = Eigen::Map<Eigen::VectorXd>(rq.lower.data(), rq.rows);
+  if (ns > 0) {
+    const Eigen::VectorXd value = qp.constraints.leftCols(n) * qp.start.head(n);
+    for (int j = 0; j < ns; ++j) {
+      const int r = rq.elastic[j].first;
+      qp.start[n + j] = std::max(0.0, qp.lower[r] - value[r]);
+    }
+  }
+}
+
+Eigen::VectorXd ParametrizationProblem::Solver::run_ipopt(const RegionQP& rq, const Eigen::VectorXd& x, double pb,
+                                                          double pe, QPResult::Status* status) {
+  const int n = static_cast<int>(rq.vars.size()), ns = static_cast<int>(rq.elastic.size());
+  QPOptions qo;
+  qo.max_iterations = options_.max_ipopt_iterations;
+  qo.tolerance = options_.ipopt_tolerance;
+  qo.progress_begin = pb;
+  qo.progress_end = pe;
+  Timer t;
+  const QPResult res = solve_qp(rq.qp, qo, progress_);
+  st_.seconds_ipopt += t.seconds();
+  ++st_.ipopt_solves;
+  st_.ipopt_iterations += res.iterations;
+  *status = res.status;
+  Eigen::VectorXd y = x;
+  if (res.status != QPResult::Status::Failed && res.x.size() == n + ns && res.x.allFinite())
+    for (int j = 0; j < n; ++j) y[rq.vars[j]] = res.x[j];
+  return y;
+}
+
+ParametrizationSolution ParametrizationProblem::solve(const ParametrizationSolveOptions& options, Progress& progress) {
+  if (options.reference && (options.reference->uv.rows() != 3 * mesh_.num_faces()))
+    throw Error(ErrorCode::InvalidArgument, "parametrization: the reference pose does not match the mesh");
+  ParametrizationSolution out;
+  Timer timer;
+  System& sys = system(options.linear_constraints, options.penalty_weight, progress);
+  out.stats.seconds_assembly = timer.seconds();
+  Solver(*this, sys, options, progress, out).run();
   return out;
 }
 

@@ -145,6 +145,7 @@ class ParametrizationProblem {
  private:
   struct System;
   System& system(ConstraintMode mode, double penalty_weight, Progress& progress);
+  class Solver;  // the state and phases of one solve()
 
   const TriMesh& mesh_;
   std::vector<int8_t> rotation_;
