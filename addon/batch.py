@@ -5,8 +5,10 @@
 
 Imports each mesh (OBJ, PLY, OFF; read by the native reader, polygons kept), runs Quantized Retopo
 (and Integer-Grid UVs with --uv), writes DIR/<name>.obj (and DIR/<name>_uv.obj) and
-DIR/report.json with one entry per input (status, reason, quads, seconds). Continues past
-failures; exits with status 1 if any input failed.
+DIR/report.json with one entry per input (status, reason, quads, seconds). Any failure of an
+input (a refused mesh, an unwritable output, a bug) is recorded with its reason and the batch goes
+on with the next input; the report is written whatever failed, and the exit status is 1 if
+anything failed (2 if not even the report could be written).
 """
 import argparse
 import importlib.util
@@ -15,6 +17,7 @@ import math
 import os
 import sys
 import time
+import traceback
 
 import bpy
 
@@ -124,29 +127,58 @@ def process(binding, path, args):
             write_obj(os.path.join(args.out, name + "_uv.obj"), mapped if refined else source, with_uv=True)
             entry["uv"] = True
             entry["uv_refined"] = refined
-    except (RuntimeError, binding.QGPError) as e:
+    except Exception as e:  # whatever failed, this input is recorded and the batch goes on
         entry["status"] = "error"
-        entry["reason"] = str(e).replace("Error: ", "").strip()
+        entry["reason"] = failure_reason(binding, e)
     entry["seconds"] = round(time.perf_counter() - start, 3)
     return entry
 
 
+def failure_reason(binding, error):
+    """The message of an operator's or the library's error as the user saw it; any other exception
+    (a file that cannot be written, a bug) with its type, and its traceback on stderr."""
+    if isinstance(error, binding.QGPError) or type(error) is RuntimeError:  # bpy.ops: "Error: <message>"
+        return str(error).replace("Error: ", "").strip()
+    traceback.print_exception(type(error), error, error.__traceback__)
+    return f"{type(error).__name__}: {error}"
+
+
 def main():
+    """Runs the batch; returns the exit status."""
     args = parse_args()
-    os.makedirs(args.out, exist_ok=True)
-    addon = load_addon()
-    binding = importlib.import_module(addon.__name__ + ".core.binding")
     entries = []
-    for path in args.inputs:
-        entry = process(binding, path, args)
-        print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
-              f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
-        entries.append(entry)
-    with open(os.path.join(args.out, "report.json"), "w") as f:
-        json.dump({"entries": entries, "failed": sum(e["status"] != "ok" for e in entries)}, f, indent=2)
-    if any(e["status"] != "ok" for e in entries):
-        sys.exit(1)
+    try:
+        os.makedirs(args.out, exist_ok=True)
+        addon = load_addon()
+        binding = importlib.import_module(addon.__name__ + ".core.binding")
+    except Exception as e:  # no input can run: each is recorded with the reason
+        traceback.print_exc()
+        reason = f"the batch could not start: {type(e).__name__}: {e}"
+        entries = [{"input": path, "status": "error", "reason": reason, "quads": 0, "flipped_quads": 0,
+                    "seconds": 0.0} for path in args.inputs]
+    else:
+        for path in args.inputs:
+            entry = process(binding, path, args)
+            print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
+                  f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
+            entries.append(entry)
+    failed = sum(e["status"] != "ok" for e in entries)
+    try:
+        with open(os.path.join(args.out, "report.json"), "w") as f:
+            json.dump({"entries": entries, "failed": failed}, f, indent=2)
+    except OSError as e:
+        print(f"batch: cannot write the report: {e}", file=sys.stderr, flush=True)
+        return 2
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
-    main()
+    # Blender exits 0 after a --python script that raised: every outcome leaves through sys.exit.
+    try:
+        status = main()
+    except SystemExit:
+        raise
+    except BaseException:
+        traceback.print_exc()
+        status = 1
+    sys.exit(status)

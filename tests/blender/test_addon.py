@@ -469,23 +469,64 @@ def test_batch_success():
     print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
 
 
+def run_batch(inputs, out, *options):
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
+                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out] + list(options),
+                          capture_output=True, text=True)
+    path = os.path.join(out, "report.json")
+    assert os.path.exists(path), f"no report (exit {proc.returncode}): {proc.stderr[-2000:]}"
+    with open(path) as f:
+        return proc, json.load(f)
+
+
+def test_batch_all_ok():
+    """Every input succeeds: exit status 0, every entry ok with its quads, the files written."""
+    out = tempfile.mkdtemp(prefix="qgp_batch_")
+    proc, report = run_batch([os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out, "--faces", "300")
+    assert proc.returncode == 0, (proc.returncode, report, proc.stderr[-2000:])
+    assert report["failed"] == 0 and [e["status"] for e in report["entries"]] == ["ok", "ok"], report
+    for e in report["entries"]:
+        name = os.path.splitext(os.path.basename(e["input"]))[0]
+        faces = [l for l in open(os.path.join(out, name + ".obj")) if l.startswith("f ")]
+        assert e["quads"] == len(faces) > 0 and e["reason"] == "", (e, len(faces))
+    print("batch: all inputs ok, exit 0")
+
+
+def test_batch_unexpected_failure():
+    """An input failing with an exception no operator raises (its output path is a directory:
+    IsADirectoryError, an OSError) is recorded with the reason, the next input still runs, the
+    report is written and the exit status is non-zero."""
+    out = tempfile.mkdtemp(prefix="qgp_batch_")
+    os.mkdir(os.path.join(out, "torus.obj"))  # the output file of the first input cannot be written
+    proc, report = run_batch([os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out, "--faces", "300")
+    assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])
+    entries = {os.path.basename(e["input"]): e for e in report["entries"]}
+    assert list(entries) == ["torus.obj", "bunny.off"] and report["failed"] == 1, report
+    torus, bunny = entries["torus.obj"], entries["bunny.off"]
+    assert torus["status"] == "error" and "IsADirectoryError" in torus["reason"], torus
+    assert os.path.join(out, "torus.obj") in torus["reason"], torus
+    assert bunny["status"] == "ok" and bunny["quads"] > 0, bunny
+    assert os.path.exists(os.path.join(out, "bunny.obj"))
+    print(f"batch: unexpected failure recorded ({torus['reason'][:60]}...), continued, exit 1")
+
+
 def main():
     addon = install_addon()
     from importlib import import_module
     binding = import_module(MODULE + ".core.binding")
     print("installed", addon.__file__, "library", binding.version())
-    test_registration()
-    test_broken_inputs(binding)
-    test_cancel_leaves_scene_unchanged(binding)
-    test_worker_fault_leaves_blender_running()
-    test_select_faces()
-    test_quad_remesh(binding)
-    test_grid_uv(binding)
-    test_grid_uv_flip_free_copy(binding)
-    test_undo_restores_scene()
-    test_batch()
-    test_batch_success()
-    print("add-on test: OK")
+    tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
+             (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
+             (test_select_faces, ()), (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)),
+             (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
+             (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ())]
+    # --only NAME[,NAME...]: just these tests (while working on them); the suite runs them all.
+    only = ARGS[ARGS.index("--only") + 1].split(",") if "--only" in ARGS else None
+    assert only is None or {t.__name__ for t, _ in tests} >= set(only), only
+    for test, args in tests:
+        if only is None or test.__name__ in only:
+            test(*args)
+    print("add-on test: OK" if only is None else f"add-on test: OK ({len(only)} of {len(tests)} tests)")
 
 
 main()
