@@ -57,6 +57,30 @@ def _session_for(obj, source, sharp_angle, isolate):
 
 
 
+def _report_figures(report, op, started, **figures):
+    """The native report's key figures for the custom property 'qgp' of a new object (Object
+    Properties > Custom Properties), for artists and pipeline scripts: the target asked for, the
+    native time and library, and the job's own figures."""
+    target = op.target_faces if op.target_mode == "FACES" else op.edge_length
+    seconds = report.get("timings_s", {}).get("total", time.perf_counter() - started)
+    return dict(target_mode=op.target_mode, target=target, seconds=round(float(seconds), 3),
+                library=binding.version(), **figures)
+
+
+def _quad_figures(report):
+    """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
+    has exactly), where each component's quads come from (quad_paths: 'integer-grid map' or
+    'T-mesh layout (why)'), how many components used the layout, and the quality figures."""
+    extraction = report.get("extraction", {})
+    quad = report.get("quad", {})
+    return dict(quads_expected=int(report.get("quantization", {}).get("quads_expected", -1)),
+                components=int(report.get("input", {}).get("components", 0)),
+                quad_paths=[str(c.get("path", "")) for c in extraction.get("components", [])],
+                layout_components=int(extraction.get("layout_components", 0)),
+                flipped_quads=int(quad.get("flipped_quads", 0)),
+                hausdorff=float(quad.get("hausdorff", -1.0)))
+
+
 def _active_mesh_object(context):
     obj = context.active_object
     if obj is None or obj.type != "MESH":
@@ -205,10 +229,10 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         vertices, quads, quad_triangle = self._session.quad_mesh()
         report = self._session.report()
         obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source)
+        obj["qgp"] = _report_figures(report, self, self._started, **_quad_figures(report))
         if not self.keep_source_visible:
             self._source_obj.hide_set(True)
-        seconds = report.get("timings_s", {}).get("total", time.perf_counter() - self._started)
-        message = f"{obj.name}: {len(quads)} quads in {seconds:.1f} s"
+        message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
         # Quads that face against the source surface (where it folds within one quad) are selected,
         # so Edit Mode shows them; everything else is deselected.
         flipped = blender_mesh.select_faces(obj.data, report.get("quad", {}).get("flipped_quad_ids", []))

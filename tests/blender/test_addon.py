@@ -267,8 +267,16 @@ def test_quad_remesh(binding):
         assert [e for e in scene_state()[0] if e[0] == source.name][0][4:] == before_source[0][4:], "source data changed"
         sizes = {len(p.vertices) for p in quad.data.polygons}
         assert sizes == {4}, f"not all quads: {sizes}"
+        # The native report's figures on the object: the mesh has exactly the quads the quantization
+        # counted (its integer cell areas, before any quad was extracted): none lost or added between
+        # the library and Blender.
+        figures = quad["qgp"].to_dict()
         n = len(quad.data.polygons)
-        assert 0.7 * target < n < 1.3 * target, (source.name, n, target)
+        assert n == figures["quads_expected"], (source.name, n, figures)
+        assert figures["target_mode"] == "FACES" and figures["target"] == target, figures
+        assert len(figures["quad_paths"]) == figures["components"] >= 1, figures
+        assert figures["layout_components"] == sum(p.startswith("T-mesh layout") for p in figures["quad_paths"])
+        assert figures["seconds"] > 0 and figures["library"] == binding.version(), figures
         assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
             euler_characteristic(quad.data), euler_characteristic(source.data))
         bpy.context.view_layer.update()
@@ -286,8 +294,10 @@ def test_quad_remesh(binding):
             extra = f", {100 * m['sharp_edge_coverage']:.1f} % of the marked sharp edges covered, no flipped quad"
         # The operator selects the quads that face against the source, and only those: none here.
         selected = sum(p.select for p in quad.data.polygons)
-        assert selected == 0, selected
-        print(f"{source.name}: {n} quads (target {target}), Euler characteristic kept{extra}")
+        assert selected == 0 == figures["flipped_quads"], (selected, figures)
+        paths = ", ".join(sorted(set(figures["quad_paths"])))
+        print(f"{source.name}: {n} quads = quads_expected (target {target}; {paths}), Euler characteristic "
+              f"kept{extra}")
 
 
 def test_select_faces():
