@@ -37,9 +37,6 @@ class SourceMesh:
             self.num_loops = len(mesh.loops)
             self.features = (meshdata.edge_vertex_pairs(mesh, sharp_edge_flags(mesh)) if use_marked_sharp
                              else np.zeros((0, 2), np.int32))
-            edges = np.empty(2 * len(mesh.edges), np.int32)
-            mesh.edges.foreach_get("vertices", edges)
-            self.edges = edges.reshape(-1, 2)
         finally:
             if evaluated_obj is not None:
                 evaluated_obj.to_mesh_clear()
@@ -138,16 +135,11 @@ def write_grid_uvs(mesh, source_mesh, corner_uv, quads_per_unit, layer_name="QGP
     return layer
 
 
-def mark_seams(mesh, source_mesh, cut_pairs):
-    """Marks the edges listed as vertex pairs (k, 2) as seams. Returns how many were marked."""
-    index = {(min(a, b), max(a, b)): e for e, (a, b) in enumerate(source_mesh.edges.tolist())}
+def mark_uv_seams(mesh, uv_layer, tolerance):
+    """Marks as seams the edges whose two polygons disagree in the UV layer `uv_layer` (by more than
+    `tolerance`): the boundaries of its UV islands inside the mesh. Returns how many edges that is."""
+    flags = meshdata.uv_seam_edges(mesh, uv_layer, tolerance)
     seams = np.zeros(len(mesh.edges), bool)
     mesh.edges.foreach_get("use_seam", seams)
-    marked = 0
-    for a, b in cut_pairs.tolist():
-        e = index.get((min(a, b), max(a, b)))
-        if e is not None:
-            seams[e] = True
-            marked += 1
-    mesh.edges.foreach_set("use_seam", seams)
-    return marked
+    mesh.edges.foreach_set("use_seam", seams | flags)
+    return int(flags.sum())

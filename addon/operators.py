@@ -248,6 +248,12 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         self.layout.prop(self, "keep_source_visible")
 
 
+# Two corners of an edge whose UVs differ by less than this share of a grid cell are one UV point
+# (the map's charts meet with a quarter-turn rotation and an integer shift: their corners differ by
+# far more, except on edges shorter than this around a cone's rotation center).
+_UV_SEAM_TOLERANCE = 1e-4
+
+
 class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator):
     """Write seam-free integer-grid UVs (layer 'QGP Grid') on the active mesh"""
 
@@ -260,7 +266,9 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description="Grid cells per UV unit: a texture of this period "
                                                         "tiles without visible seams")
-    mark_seams: bpy.props.BoolProperty(name="Mark Seams", default=False, description="Mark the cuts as seams")
+    mark_seams: bpy.props.BoolProperty(
+        name="Mark Seams", default=False,
+        description="Mark the map's cuts (the UV islands' boundaries) as seams, on the mesh or on its Flip-Free Copy")
     flip_free_copy: bpy.props.BoolProperty(
         name="Flip-Free Copy", default=True,
         description="Where the map on the mesh's own triangles would keep flipped triangles, write a new "
@@ -276,16 +284,30 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
             if refined:
                 obj = blender_mesh.create_grid_uv_object(context, self._source_obj, vertices, triangles, corner_uv,
                                                          triangle_source, self._source, self.quads_per_unit)
-                self.report({"INFO"}, f"{obj.name}: the map needed the layout's edges inserted; "
-                                      f"UV layer 'QGP Grid' on {len(triangles)} triangles, none flipped "
-                                      f"(source unchanged)")
+                message = (f"{obj.name}: the map needed the layout's edges inserted; UV layer 'QGP Grid' on "
+                           f"{len(triangles)} triangles, none flipped (source unchanged)")
+                seams = 0
+                if self.mark_seams:
+                    # The copy's cuts are its own edges (the source's cut edges split by the layout's):
+                    # those along which the map's charts meet, i.e. the UV islands' inner boundaries.
+                    seams = blender_mesh.mark_uv_seams(obj.data, obj.data.uv_layers["QGP Grid"],
+                                                       _UV_SEAM_TOLERANCE / self.quads_per_unit)
+                    message += f", {seams} seam edges marked"
+                obj["qgp"] = _report_figures(self._session.report(), self, self._started,
+                                             refined_components=int(refined), triangles=len(triangles),
+                                             seams=seams)
+                self.report({"INFO"}, message)
                 return {"FINISHED"}
-        corner_uv, cuts = self._session.grid_uv(len(self._source.triangles))
+        corner_uv, _ = self._session.grid_uv(len(self._source.triangles))
         mesh = self._source_obj.data
-        blender_mesh.write_grid_uvs(mesh, self._source, corner_uv, self.quads_per_unit)
+        layer = blender_mesh.write_grid_uvs(mesh, self._source, corner_uv, self.quads_per_unit)
         message = "UV layer 'QGP Grid' written"
         if self.mark_seams:
-            message += f", {blender_mesh.mark_seams(mesh, self._source, cuts)} seam edges marked"
+            # The cuts as the UV layer has them: the map's cut edges, and where a cut runs inside a
+            # polygon (a diagonal of a quad), the polygon's edges that the cut moved to (all its
+            # loops are in one chart).
+            seams = blender_mesh.mark_uv_seams(mesh, layer, _UV_SEAM_TOLERANCE / self.quads_per_unit)
+            message += f", {seams} seam edges marked"
         mesh.update()
         # A map the global solve left flipped: its valid fallback lives on a refined mesh, which the
         # source object's loops cannot hold (Flip-Free Copy writes it as a new object).

@@ -77,3 +77,35 @@ def loop_uvs_from_triangles(corner_uv, triangles, triangle_loops, triangle_polyg
         for t, uv in placed.items():
             loop_uv[triangle_loops[t]] = uv
     return loop_uv
+
+
+def uv_seam_edges(mesh, uv_layer, tolerance=0.0):
+    """Flag per edge (len(mesh.edges) bool): set where the polygons on its two sides disagree in UV
+    (by more than `tolerance` in a coordinate) at one of its ends, i.e. the edges along which the
+    UV islands are cut apart. Boundary edges (one polygon) are never set."""
+    num_loops = len(mesh.loops)
+    uv = np.empty(2 * num_loops, np.float32)
+    uv_layer.data.foreach_get("uv", uv)
+    uv = uv.reshape(-1, 2).astype(np.float64)
+    loop_vertex = np.empty(num_loops, np.int32)
+    loop_edge = np.empty(num_loops, np.int32)
+    mesh.loops.foreach_get("vertex_index", loop_vertex)
+    mesh.loops.foreach_get("edge_index", loop_edge)
+    loop_start = np.empty(len(mesh.polygons), np.int32)
+    loop_total = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", loop_start)
+    mesh.polygons.foreach_get("loop_total", loop_total)
+    # A loop's edge runs from its vertex to the vertex of the polygon's next loop.
+    following = np.arange(1, num_loops + 1, dtype=np.int64)
+    following[loop_start + loop_total - 1] = loop_start
+    # Each side of an edge gives the UV of both ends: (edge, vertex, uv) twice per loop.
+    edge = np.concatenate([loop_edge, loop_edge])
+    vertex = np.concatenate([loop_vertex, loop_vertex[following]])
+    corner = np.concatenate([uv, uv[following]])
+    order = np.lexsort((vertex, edge))
+    edge, vertex, corner = edge[order], vertex[order], corner[order]
+    same_end = (edge[1:] == edge[:-1]) & (vertex[1:] == vertex[:-1])
+    apart = same_end & (np.abs(corner[1:] - corner[:-1]).max(axis=1) > tolerance)
+    flags = np.zeros(len(mesh.edges), bool)
+    flags[edge[1:][apart]] = True
+    return flags

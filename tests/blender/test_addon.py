@@ -359,6 +359,37 @@ def grid_seam_residual(mesh, layer, quads_per_unit):
     return worst
 
 
+def uv_cut_edges(mesh, layer, tolerance=1e-4):
+    """Vertex pairs of the edges whose two polygons disagree in the UV layer (by more than
+    `tolerance` in a coordinate at one end): the UV islands' inner boundaries, derived here from the
+    loops on their own (not by the add-on's code)."""
+    uv = [d.uv[:] for d in layer.data]
+    loop_vertex = [l.vertex_index for l in mesh.loops]
+    sides = {}
+    for poly in mesh.polygons:
+        loops = list(poly.loop_indices)
+        for i, li in enumerate(loops):
+            lj = loops[(i + 1) % len(loops)]
+            a, b = loop_vertex[li], loop_vertex[lj]
+            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
+    return {key for key, pair in sides.items() for other in pair[1:]
+            if any(abs(other[v][k] - pair[0][v][k]) > tolerance for v in key for k in (0, 1))}
+
+
+def seam_edges(mesh):
+    return {tuple(sorted(e.vertices)) for e in mesh.edges if e.use_seam}
+
+
+def native_cut_edges(obj):
+    """The map's cut edges as the native session of the object's last Integer-Grid UVs run lists
+    them (vertex pairs), restricted to the mesh's edges (a cut may run along a polygon's diagonal)."""
+    operators = sys.modules[MODULE + ".operators"]
+    obj.data.calc_loop_triangles()
+    _, cuts = operators._session_cache[obj.name][1].grid_uv(len(obj.data.loop_triangles))
+    edges = {tuple(sorted(e.vertices)) for e in obj.data.edges}
+    return {(min(a, b), max(a, b)) for a, b in cuts.tolist()} & edges
+
+
 def test_grid_uv(binding):
     reset_scene()
     bpy.ops.mesh.primitive_monkey_add()
@@ -384,12 +415,31 @@ def test_grid_uv(binding):
         assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
         assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
         assert [tuple(v.co) for v in obj.data.vertices] == vertices_before, "geometry changed"
-        seams = sum(e.use_seam for e in obj.data.edges)
-        assert seams > 0
+        # Mark Seams: the seams are exactly the UV islands' inner boundaries, which include every
+        # cut edge the library lists.
+        seams = seam_edges(obj.data)
+        islands = uv_cut_edges(obj.data, layer, 1e-4 / per_unit)
+        assert seams and seams == islands, (len(seams), len(islands), len(seams - islands), len(islands - seams))
+        cuts = native_cut_edges(obj)
+        assert cuts and cuts <= seams, len(cuts - seams)
+        seams = len(seams)
         # Float32 UVs: the residual is at the level of float precision, not of the grid.
         residual = grid_seam_residual(obj.data, layer, per_unit)
         assert residual < 1e-3, residual
         print(f"{obj.name}: grid UVs on {len(uv)} loops, {seams} seams, transition residual {residual:.2e}")
+
+
+def test_grid_uv_seams_off():
+    """Mark Seams off: the map has cuts (UV islands), but no edge is marked."""
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
+    torus = bpy.context.active_object
+    result = bpy.ops.object.qgp_grid_uv(target_faces=600, mark_seams=False)
+    assert result == {"FINISHED"}, result
+    cuts = uv_cut_edges(torus.data, torus.data.uv_layers["QGP Grid"])
+    assert cuts, "no UV island boundary: the check below would be empty"
+    assert not seam_edges(torus.data), len(seam_edges(torus.data))
+    print(f"Mark Seams off: {len(cuts)} cut edges, none marked")
 
 
 def test_grid_uv_flip_free_copy(binding):
@@ -419,10 +469,24 @@ def test_grid_uv_flip_free_copy(binding):
     assert residual < 1e-3, residual
     print(f"{copy.name}: flip-free grid UVs on {len(mesh.polygons)} triangles (source {len(joint.data.polygons)}), "
           f"uv area {sum(areas):.1f} quads, transition residual {residual:.2e}, source unchanged")
+    assert not seam_edges(mesh), "Mark Seams is off"
+    assert copy["qgp"]["refined_components"] >= 1 and copy["qgp"]["seams"] == 0, copy["qgp"].to_dict()
     select_only(joint)
     result = bpy.ops.object.qgp_grid_uv(target_faces=500, flip_free_copy=False)
     assert result == {"FINISHED"}, result
     assert "QGP Grid" in joint.data.uv_layers and bpy.data.objects.get("joint_grid_uv.001") is None
+    # Mark Seams with a Flip-Free Copy: the copy's seams are its UV islands' inner boundaries; the
+    # source keeps none.
+    select_only(joint)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=500, quads_per_unit=2.0, mark_seams=True)
+    assert result == {"FINISHED"}, result
+    copy = bpy.data.objects["joint_grid_uv.001"]
+    seams = seam_edges(copy.data)
+    islands = uv_cut_edges(copy.data, copy.data.uv_layers["QGP Grid"], 1e-4 / 2.0)
+    assert seams and seams == islands, (len(seams), len(islands), len(seams - islands), len(islands - seams))
+    assert copy["qgp"]["seams"] == len(seams), (copy["qgp"].to_dict(), len(seams))
+    assert not seam_edges(joint.data), "the source got seams"
+    print(f"{copy.name}: {len(seams)} seams marked on the copy, none on the source")
 
 
 def test_undo_restores_scene():
@@ -528,8 +592,9 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_select_faces, ()), (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)),
-             (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
-             (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ())]
+             (test_grid_uv_seams_off, ()), (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()),
+             (test_batch, ()), (test_batch_success, ()), (test_batch_all_ok, ()),
+             (test_batch_unexpected_failure, ())]
     # --only NAME[,NAME...]: just these tests (while working on them); the suite runs them all.
     only = ARGS[ARGS.index("--only") + 1].split(",") if "--only" in ARGS else None
     assert only is None or {t.__name__ for t, _ in tests} >= set(only), only
