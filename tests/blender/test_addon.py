@@ -300,6 +300,83 @@ def test_quad_remesh(binding):
               f"kept{extra}")
 
 
+def mesh_data_state(obj):
+    """Everything of an object's mesh data an operator could change."""
+    m = obj.data
+    return (m.name, len(m.vertices), len(m.edges), len(m.polygons), [tuple(v.co) for v in m.vertices],
+            [tuple(p.vertices) for p in m.polygons], [e.use_seam for e in m.edges],
+            [l.name for l in m.uv_layers], [p.select for p in m.polygons], [len(obj.modifiers)])
+
+
+def test_keep_source_visible():
+    """Keep Source Visible (the remesh operator's keep_source_visible, also in the panel): on, the
+    source stays visible; off (the default), it is hidden; either way its mesh data is unchanged and
+    the new object is visible."""
+    assert bpy.context.scene.qgp_settings.keep_source_visible is False
+    assert bpy.ops.object.qgp_quad_remesh.get_rna_type().properties["keep_source_visible"].default is False
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=48, minor_segments=16)
+    torus = bpy.context.active_object
+    before = mesh_data_state(torus)
+    for keep in (True, False):
+        select_only(torus)
+        assert not torus.hide_get()
+        result = bpy.ops.object.qgp_quad_remesh(target_faces=300, keep_source_visible=keep)
+        assert result == {"FINISHED"}, result
+        quad = bpy.context.active_object
+        assert quad is not torus and not quad.hide_get()
+        assert torus.hide_get() is (not keep), (keep, torus.hide_get())
+        assert torus.visible_get() is keep
+        assert mesh_data_state(torus) == before, "the source's mesh data changed"
+        torus.hide_set(False)
+    print("Keep Source Visible: on keeps the source shown, off hides it; its data unchanged")
+
+
+def test_redo_reuses_session():
+    """Redo (undo, then the operator again with new options, as the redo panel does) with only the
+    density changed reuses the object's native session: the report shows the seamless map solved
+    for the first density, re-quantized at a scale other than 1. Moving a vertex drops the session:
+    a fresh worker solves the map for the new density (scale 1)."""
+    operators = sys.modules[MODULE + ".operators"]
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
+    name = bpy.context.active_object.name
+    bpy.ops.ed.undo_push(message="torus")
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=600) == {"FINISHED"}
+    session = operators._session_cache[name][1]
+    first = session.report()
+    scales = lambda report: [c["scale"] for c in report["quantization"]["components"]]
+    assert set(scales(first)) == {1.0}, scales(first)  # solved for this density
+    assert first["timings_s"]["seamless_map"] > 0.01, first["timings_s"]
+    bpy.ops.ed.undo_push(message="remesh at 600")
+    bpy.ops.ed.undo()
+    assert bpy.data.objects.get(name + "_quads") is None, "undo did not remove the quads"
+    select_only(bpy.data.objects[name])
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=900) == {"FINISHED"}
+    assert operators._session_cache[name][1] is session and session.alive, "the session was not reused"
+    redo = session.report()
+    assert redo["seamless"]["edge_length"] == first["seamless"]["edge_length"], "the seamless map was solved again"
+    assert all(s != 1.0 for s in scales(redo)), scales(redo)
+    assert redo["timings_s"]["seamless_map"] < 0.01 * first["timings_s"]["seamless_map"], redo["timings_s"]
+    quads = bpy.data.objects[name + "_quads"]
+    assert len(quads.data.polygons) == quads["qgp"]["quads_expected"] != first["quantization"]["quads_expected"]
+    # An edit of the source drops the session.
+    torus = bpy.data.objects[name]
+    torus.data.vertices[0].co.z += 0.05
+    torus.data.update()
+    select_only(torus)
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=900) == {"FINISHED"}
+    fresh = operators._session_cache[name][1]
+    assert fresh is not session and not session.alive, "the edited mesh reused the old session"
+    if hasattr(session, "pid"):
+        assert fresh.pid != session.pid
+    again = fresh.report()
+    assert set(scales(again)) == {1.0}, scales(again)
+    assert again["seamless"]["edge_length"] != first["seamless"]["edge_length"]
+    print(f"redo: session reused (seamless map of {first['timings_s']['seamless_map']:.2f} s kept, re-quantized at "
+          f"scale {scales(redo)[0]:.3f}); after a vertex moved: a fresh solve")
+
+
 def test_select_faces():
     """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
     and vertices; the rest deselected; ids out of range ignored."""
@@ -591,10 +668,10 @@ def main():
     print("installed", addon.__file__, "library", binding.version())
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
-             (test_select_faces, ()), (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)),
-             (test_grid_uv_seams_off, ()), (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()),
-             (test_batch, ()), (test_batch_success, ()), (test_batch_all_ok, ()),
-             (test_batch_unexpected_failure, ())]
+             (test_select_faces, ()), (test_keep_source_visible, ()), (test_redo_reuses_session, ()),
+             (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
+             (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
+             (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ())]
     # --only NAME[,NAME...]: just these tests (while working on them); the suite runs them all.
     only = ARGS[ARGS.index("--only") + 1].split(",") if "--only" in ARGS else None
     assert only is None or {t.__name__ for t, _ in tests} >= set(only), only
