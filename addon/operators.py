@@ -94,11 +94,13 @@ class _JobOperator:
     _timer = None
     _session = None
     _started = 0.0
+    _cancelling = False
 
     def _start_modal(self, context, session, job):
         session.start(job)
         self._session = session
         self._started = time.perf_counter()
+        self._cancelling = False
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 1000)
@@ -115,14 +117,16 @@ class _JobOperator:
 
     def modal(self, context, event):
         if event.type == "ESC":
-            try:
-                self._session.cancel()
-                self._session.wait()
-            except binding.QGPError:
-                pass
-            self._end_modal(context)
-            self.report({"WARNING"}, "Cancelled; the scene is unchanged")
-            return {"CANCELLED"}
+            # The native job stops at its next cancellation point, which can be seconds away: the
+            # timer goes on polling it (Blender stays responsive) and the run ends once it stopped.
+            if not self._cancelling:
+                self._cancelling = True
+                try:
+                    self._session.cancel()
+                except binding.QGPError:  # the worker died: the next poll reports it
+                    pass
+                context.workspace.status_text_set(f"{self.bl_label}: cancelling...")
+            return {"RUNNING_MODAL"}
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
         try:
@@ -132,11 +136,19 @@ class _JobOperator:
             self.report({"ERROR"}, e.message)
             return {"CANCELLED"}
         if state == binding.STATE_RUNNING:
-            context.window_manager.progress_update(int(1000 * fraction))
-            context.workspace.status_text_set(
-                f"{self.bl_label}: {stage.replace('_', ' ')} {100 * fraction:.0f}%  (Esc to cancel)")
+            if not self._cancelling:
+                context.window_manager.progress_update(int(1000 * fraction))
+                context.workspace.status_text_set(
+                    f"{self.bl_label}: {stage.replace('_', ' ')} {100 * fraction:.0f}%  (Esc to cancel)")
             return {"RUNNING_MODAL"}
         self._end_modal(context)
+        if self._cancelling:  # stopped (or finished just before Esc): nothing reaches the scene
+            try:
+                self._session.wait()
+            except binding.QGPError:
+                pass
+            self.report({"WARNING"}, "Cancelled; the scene is unchanged")
+            return {"CANCELLED"}
         try:
             self._session.wait()
             return self._finish(context)
