@@ -21,7 +21,6 @@ import argparse
 import csv
 import importlib.util
 import json
-import math
 import os
 import sys
 import time
@@ -54,8 +53,8 @@ def parse_args():
     ap = argparse.ArgumentParser(prog="blender -b --python bench/compare_quadriflow.py --")
     ap.add_argument("--meshes", default="", help="comma-separated file names in --mesh-dir (default: all manifold)")
     ap.add_argument("--targets", default="2000,8000", help="comma-separated target quad counts")
-    ap.add_argument("--mesh-dir", default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared",
-                                                                                      "meshes")))
+    ap.add_argument("--mesh-dir",
+                    default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared", "meshes")))
     ap.add_argument("--out", default=os.path.join(REPO, "bench", "results"))
     ap.add_argument("--sharp-angle", type=float, default=60.0,
                     help="dihedral angle (deg) of the sharp edges kept by Quantized Retopo on CAD meshes "

@@ -59,8 +59,8 @@ def cell_values(r):
 def compare_markdown(rows):
     """One line per mesh and target, each cell 'Quantized Retopo | QuadriFlow'; status messages listed below."""
     tools = [t for t in TOOL_LABEL if any(r["tool"] == t for r in rows)]
-    header = ["time s", "quads", "irregular", "flipped", "χ kept", "Hausdorff % diag", "angle dev mean °", "angle dev p95 °",
-              "min SJ", "sharp coverage"]
+    header = ["time s", "quads", "irregular", "flipped", "χ kept", "Hausdorff % diag", "angle dev mean °",
+              "angle dev p95 °", "min SJ", "sharp coverage"]
     lines = [f"Cells: {' / '.join(TOOL_LABEL[t] for t in tools)}.", "",
              "| mesh | target | status | " + " | ".join(header) + " |",
              "|---|---:|---|" + "---:|" * len(header)]
@@ -115,7 +115,8 @@ def compare_summary(rows):
         hd = median([number(r["hausdorff"]) for r in ok])
         lines.append(
             f"| {TOOL_LABEL.get(tool, tool)} | {len(rs)} | {len(ok)} | {count('refused')} | {count('unchanged')} "
-            f"| {count('timeout')} | {count('crashed')} | {sum(r['euler_characteristic_preserved'] == 'True' for r in ok)} "
+            f"| {count('timeout')} | {count('crashed')} "
+            f"| {sum(r['euler_characteristic_preserved'] == 'True' for r in ok)} "
             f"| {sum(int(number(r['flipped_quads']) or 0) for r in ok)} "
             f"| {fmt(median([number(r['seconds']) for r in rs]), '.2f')} "
             f"| {'—' if hd is None else format(100 * hd, '.2f')} "
@@ -141,10 +142,11 @@ def compare_plots(rows, images):
     ax.legend(fontsize=8)
     paths.append(save(fig, images, "bench_compare_time.png"))
 
-    metrics = [("hausdorff", "Hausdorff (% of diagonal)", 100.0), ("p95_angle_deviation_deg", "p95 angle deviation (°)", 1),
+    metrics = [("hausdorff", "Hausdorff (% of diagonal)", 100.0),
+               ("p95_angle_deviation_deg", "p95 angle deviation (°)", 1),
                ("irregular_vertices", "irregular vertices", 1), ("min_scaled_jacobian", "min scaled Jacobian", 1)]
-    meshes = sorted({r["mesh"] for r in rows}, key=lambda m: min(int(r["input_triangles"]) for r in rows
-                                                                    if r["mesh"] == m))
+    meshes = sorted({r["mesh"] for r in rows},
+                    key=lambda m: min(int(r["input_triangles"]) for r in rows if r["mesh"] == m))
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     for ax, (key, label, scale) in zip(axes.flat, metrics):
         for tool in TOOL_LABEL:

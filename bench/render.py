@@ -10,7 +10,6 @@ PNG, compressed; about 100-200 KB at the default size).
 """
 import argparse
 import csv
-import math
 import os
 import sys
 
@@ -42,8 +41,8 @@ def parse_args():
     ap.add_argument("--cases", default="spot.obj:2000,fertility.off:2000,fandisk.obj:8000")
     ap.add_argument("--results", default=os.path.join(REPO, "bench", "results"))
     ap.add_argument("--out", default=os.path.join(REPO, "docs", "images"))
-    ap.add_argument("--mesh-dir", default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared",
-                                                                                      "meshes")))
+    ap.add_argument("--mesh-dir",
+                    default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared", "meshes")))
     ap.add_argument("--width", type=int, default=1000)
     return ap.parse_args(argv)
 

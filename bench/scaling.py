@@ -159,7 +159,8 @@ def row_for(series, shape, level, triangles, target, result):
     status, message, wall, peak_mb, report = result
     timings = report.get("timings_s", {})
     row = {"series": series, "shape": shape, "level": level, "triangles": triangles, "target": target,
-           "status": status, "message": message, "wall_s": round(wall, 3), "peak_rss_mb": None if peak_mb is None else round(peak_mb, 1),
+           "status": status, "message": message, "wall_s": round(wall, 3),
+           "peak_rss_mb": None if peak_mb is None else round(peak_mb, 1),
            "total_s": timings.get("total")}
     quad = report.get("quad") or report.get("quads") or {}  # the report object was renamed "quad"
     row["quads"] = quad.get("faces")
@@ -177,8 +178,8 @@ def main():
     ap.add_argument("--density-level", type=int, default=2, help="subdivision level of the density series")
     ap.add_argument("--densities", default="500,1000,2000,4000,8000,16000,32000")
     ap.add_argument("--timeout", type=float, default=1800.0, help="seconds before a run is killed")
-    ap.add_argument("--mesh-dir", default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared",
-                                                                                      "meshes")))
+    ap.add_argument("--mesh-dir",
+                    default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared", "meshes")))
     ap.add_argument("--out", default=os.path.join(REPO, "bench", "results"))
     ap.add_argument("--qgp", default=os.path.join(REPO, "build", "bin", "qgp"))
     args = ap.parse_args()

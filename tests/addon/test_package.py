@@ -4,7 +4,6 @@ bl_info, $ORIGIN RUNPATHs, and the bundled library loading and running an intake
 system's copies of its dependencies hidden (bind-mounted away in a private mount namespace)."""
 import ast
 import glob
-import json
 import os
 import re
 import subprocess
@@ -47,17 +46,19 @@ def main():
         check(key in manifest, f"manifest lacks {key}")
     check(manifest["type"] == "add-on", "manifest type must be add-on")
     check(manifest["blender_version_min"] == "4.2.0", "blender_version_min must be 4.2.0")
-    check(len(manifest["tagline"]) <= 64 and manifest["tagline"][-1] not in ".!?,;:", "tagline: <= 64 chars, no trailing punctuation")
-    check(all(l.startswith("SPDX:") for l in manifest["license"]), "license entries must be SPDX:...")
+    check(len(manifest["tagline"]) <= 64 and manifest["tagline"][-1] not in ".!?,;:",
+          "tagline: <= 64 chars, no trailing punctuation")
+    check(all(entry.startswith("SPDX:") for entry in manifest["license"]), "license entries must be SPDX:...")
     check(manifest.get("platforms") == ["linux-x64"], "platforms must list linux-x64 (native library inside)")
     check(re.fullmatch(r"[a-z][a-z0-9_]*", ident) is not None, "id must be a Python identifier")
     for key, value in manifest.get("permissions", {}).items():
-        check(isinstance(value, str) and value and value[-1] not in ".", f"permission {key} needs a reason without trailing period")
+        check(isinstance(value, str) and value and value[-1] not in ".",
+              f"permission {key} needs a reason without trailing period")
 
     with zipfile.ZipFile(ext_zip) as z:
         names = z.namelist()
-    for required in ("__init__.py", "blender_manifest.toml", "lib/libqgp.so", "core/binding.py", "core/worker.py", "operators.py",
-                     "ui.py", "batch.py"):
+    for required in ("__init__.py", "blender_manifest.toml", "lib/libqgp.so", "core/binding.py", "core/worker.py",
+                     "operators.py", "ui.py", "batch.py"):
         check(required in names, f"extension zip lacks {required} at its root")
     check(not any("__pycache__" in n for n in names), "extension zip contains __pycache__")
     with zipfile.ZipFile(legacy_zip) as z:

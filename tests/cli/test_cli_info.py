@@ -73,7 +73,7 @@ def main():
             g = inp["genus"] if len(inp["genus"]) <= 4 else f"{len(inp['genus'])} comps, sum {sum(inp['genus'])}"
             b = inp["boundary_loops"] if len(inp["boundary_loops"]) <= 4 else f"sum {sum(inp['boundary_loops'])}"
             rows.append((name, "ok", repairs, inp["components"], g, b, ms))
-    print(f"| file | status | repairs / reason | components | genus | boundary loops | ms |")
+    print("| file | status | repairs / reason | components | genus | boundary loops | ms |")
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         print("| " + " | ".join(str(x) if not isinstance(x, float) else f"{x:.0f}" for x in r) + " |")

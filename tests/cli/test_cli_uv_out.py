@@ -77,7 +77,8 @@ def main():
     ap.add_argument("--meshes", required=True)
     args = ap.parse_args()
     failures = []
-    print("mesh | quads | igm flipped | cell map | uv triangles | flipped | degenerate | seam residual | cones off grid")
+    print("mesh | quads | igm flipped | cell map | uv triangles | flipped | degenerate | seam residual | "
+          "cones off grid")
     with tempfile.TemporaryDirectory() as tmp:
         for name, faces in RUNS:
             out, uv, rep = (os.path.join(tmp, name + s) for s in (".obj", "_uv.obj", ".json"))

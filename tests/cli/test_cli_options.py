@@ -1,0 +1,215 @@
+#!/usr/bin/python3
+"""Every `qgp` option and exit code, as a batch user meets them.
+
+Exit codes: 0 success, 1 bad command line (or a features file that says nothing usable), 2 unusable
+input (also with --uv-out / --layout-out asked), 3 a stage failed. Outputs are read back: the -o
+quad mesh (only quads, edge-manifold, the input's Euler characteristic, as many faces as the report
+says), the --layout-out polylines (one per T-edge), features from --sharp-angle and --features
+(counted here independently from the input's dihedral angles), --edge-length, --quantizer and
+--drop-bad-components.
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+FAILURES = []
+
+
+def check(condition, what):
+    print(("ok   " if condition else "FAIL ") + what)
+    if not condition:
+        FAILURES.append(what)
+
+
+def run(qgp, *args):
+    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
+
+
+def read_obj(path):
+    """Vertices and faces (0-based index lists) of an OBJ; `l` polylines separately."""
+    vertices, faces, lines = [], [], []
+    for line in open(path):
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "v":
+            vertices.append(tuple(map(float, parts[1:4])))
+        elif parts[0] == "f":
+            faces.append([int(p.split("/")[0]) - 1 for p in parts[1:]])
+        elif parts[0] == "l":
+            lines.append([int(p) - 1 for p in parts[1:]])
+    return vertices, faces, lines
+
+
+def edge_faces(faces):
+    count = {}
+    for f in faces:
+        for i in range(len(f)):
+            a, b = f[i], f[(i + 1) % len(f)]
+            count.setdefault((min(a, b), max(a, b)), []).append(f)
+    return count
+
+
+def sharp_edges(vertices, faces, degrees):
+    """Edges of a triangle mesh whose two face normals differ by more than `degrees`."""
+    def normal(f):
+        a, b, c = (vertices[i] for i in f)
+        u = [b[k] - a[k] for k in range(3)]
+        v = [c[k] - a[k] for k in range(3)]
+        n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        length = math.sqrt(sum(x * x for x in n))
+        return [x / length for x in n]
+    sharp = []
+    for edge, fs in edge_faces(faces).items():
+        if len(fs) == 2:
+            n1, n2 = normal(fs[0]), normal(fs[1])
+            cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(n1, n2))))
+            if math.degrees(math.acos(cos)) > degrees:
+                sharp.append(edge)
+    return sharp
+
+
+def test_usage_errors(qgp, meshes, tmp):
+    spot = os.path.join(meshes, "spot.obj")
+    out = os.path.join(tmp, "never.obj")
+    for args, what in [((), "no command"), (("remesh", spot), "no -o"),
+                       (("remesh", spot, "-o", out, "--bogus"), "unknown option"),
+                       (("remesh", spot, "-o", out, "--faces", 100, "--edge-length", 0.1), "both sizes"),
+                       (("remesh", spot, "-o", out, "--quantizer", "magic"), "unknown quantizer"),
+                       (("remesh", spot, "-o", out, "--sharp-angle", 200), "sharp angle above 180"),
+                       (("remesh", spot, "-o", out, "--faces", "many"), "a word for a number"),
+                       (("frobnicate", spot), "unknown command")]:
+        proc = run(qgp, *args)
+        check(proc.returncode == 1 and proc.stderr.startswith("qgp: "), f"usage error ({what}): exit 1 with a reason")
+    check(not os.path.exists(out), "a usage error writes nothing")
+    for args in (("--help",), ("remesh", "--help"), ("info", "--help")):
+        proc = run(qgp, *args)
+        check(proc.returncode == 0 and "Usage" in proc.stdout, f"qgp {' '.join(args)}: exit 0 with the usage")
+
+
+def test_unusable_input(qgp, tmp):
+    bad = os.path.join(tmp, "nan.obj")
+    with open(bad, "w") as f:
+        f.write("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
+    for extra in ([], ["--uv-out", os.path.join(tmp, "uv.obj")], ["--layout-out", os.path.join(tmp, "l.obj")]):
+        report = os.path.join(tmp, "nan.json")
+        proc = run(qgp, "remesh", bad, "-o", os.path.join(tmp, "nan_quads.obj"), "--report", report, *extra)
+        r = json.load(open(report))
+        check(proc.returncode == 2 and r["status"] == "error" and r["error"]["code"] == "invalid_mesh",
+              f"NaN coordinate {' '.join(extra[:1])}: exit 2, error report")
+    proc = run(qgp, "remesh", os.path.join(tmp, "missing.obj"), "-o", os.path.join(tmp, "m.obj"))
+    check(proc.returncode == 2, "missing input file: exit 2")
+    check(not os.path.exists(os.path.join(tmp, "nan_quads.obj")), "no quad mesh written for unusable input")
+
+
+def test_stage_failure(qgp, meshes, tmp):
+    # Direct rounding folds joint's layout at 600 quads: the round baseline is refused with its reason.
+    out, report = os.path.join(tmp, "round.obj"), os.path.join(tmp, "round.json")
+    proc = run(qgp, "remesh", os.path.join(meshes, "joint.obj"), "-o", out, "--faces", 600, "--quantizer", "round",
+               "--report", report)
+    r = json.load(open(report))
+    check(proc.returncode == 3 and r["error"]["code"] == "stage_failed" and "round" in r["error"]["message"],
+          f"joint with --quantizer round: exit 3, stage_failed ({proc.stderr.strip()[:80]})")
+    check(not os.path.exists(out), "a failed stage writes no quad mesh")
+
+
+def test_remesh_outputs(qgp, meshes, tmp):
+    out, report, layout = (os.path.join(tmp, n) for n in ("spot.obj", "spot.json", "spot_layout.obj"))
+    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", out, "--faces", 500, "--report", report,
+               "--layout-out", layout)
+    check(proc.returncode == 0, f"spot at 500 quads: exit 0 ({proc.stderr.strip()[:80]})")
+    r = json.load(open(report))
+    vertices, faces, _ = read_obj(out)
+    check(all(len(f) == 4 for f in faces), "-o: every face a quad")
+    check(len(faces) == r["quad"]["faces"] == r["quantization"]["quads_expected"],
+          "-o: as many quads as the report says")
+    check(all(0 <= i < len(vertices) for f in faces for i in f), "-o: indices in range")
+    edges = edge_faces(faces)
+    check(all(len(fs) == 2 for fs in edges.values()), "-o: closed and edge-manifold (spot is closed)")
+    check(len(vertices) - len(edges) + len(faces) == 2, "-o: Euler characteristic 2, as spot's")
+    _, _, lines = read_obj(layout)
+    check(len(lines) == r["tmesh"]["edges"], f"--layout-out: one polyline per T-edge ({len(lines)})")
+
+
+def test_edge_length(qgp, meshes, tmp):
+    report = os.path.join(tmp, "edge.json")
+    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", os.path.join(tmp, "edge.obj"),
+               "--edge-length", 0.05, "--report", report)
+    r = json.load(open(report))
+    check(proc.returncode == 0 and r["seamless"]["edge_length"] == 0.05, "--edge-length: the map is solved for it")
+
+
+def test_features(qgp, meshes, tmp):
+    joint = os.path.join(meshes, "joint.obj")
+    vertices, faces, _ = read_obj(joint)
+    sharp = sharp_edges(vertices, faces, 40)
+    check(len(sharp) > 100, f"joint has sharp edges at 40 degrees ({len(sharp)})")
+    by_angle = os.path.join(tmp, "angle.json")
+    proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "angle.obj"), "--faces", 500, "--sharp-angle", 40,
+               "--report", by_angle)
+    check(proc.returncode == 0 and json.load(open(by_angle))["field"]["feature_edges"] == len(sharp),
+          "--sharp-angle 40: exactly the edges sharper than 40 degrees are features")
+    pairs = os.path.join(tmp, "joint.feat")
+    with open(pairs, "w") as f:
+        f.write("# sharp edges of joint.obj at 40 degrees\n" + "".join(f"{a} {b}\n" for a, b in sharp))
+    by_file = os.path.join(tmp, "file.json")
+    proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "file.obj"), "--faces", 500, "--features", pairs,
+               "--report", by_file)
+    check(proc.returncode == 0 and json.load(open(by_file))["field"]["feature_edges"] == len(sharp),
+          "--features FILE: the listed edges are the features")
+    broken = os.path.join(tmp, "broken.feat")
+    with open(broken, "w") as f:
+        f.write("0 1\n7\n")
+    proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "b.obj"), "--features", broken)
+    check(proc.returncode == 1 and "line 2" in proc.stderr, "--features with a malformed line: exit 1 naming the line")
+    proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "b.obj"), "--features", os.path.join(tmp, "none.feat"))
+    check(proc.returncode == 2, "--features with a missing file: exit 2")
+
+
+def test_drop_bad_components(qgp, meshes, tmp):
+    # spot plus, far away, three triangles on one edge (a non-manifold part).
+    vertices, faces, _ = read_obj(os.path.join(meshes, "spot.obj"))
+    n = len(vertices)
+    fan = [(10, 0, 0), (11, 0, 0), (10.5, 1, 0), (10.5, -1, 0), (10.5, 0, 1)]
+    path = os.path.join(tmp, "spot_and_fan.obj")
+    with open(path, "w") as f:
+        for v in vertices + fan:
+            f.write("v %r %r %r\n" % v)
+        for face in faces + [[n, n + 1, n + 2], [n + 1, n, n + 3], [n, n + 1, n + 4]]:
+            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
+    proc = run(qgp, "remesh", path, "-o", os.path.join(tmp, "refused.obj"), "--faces", 500)
+    check(proc.returncode == 2, "a non-manifold part: refused (exit 2) without --drop-bad-components")
+    report = os.path.join(tmp, "dropped.json")
+    out = os.path.join(tmp, "dropped.obj")
+    proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, "--drop-bad-components", "--report", report)
+    r = json.load(open(report))
+    kinds = [rep["kind"] for rep in r["input"]["repairs"]]
+    check(proc.returncode == 0 and "dropped_nonmanifold_components" in kinds,
+          "--drop-bad-components: the part is dropped and the report says so")
+    qv, qf, _ = read_obj(out)
+    check(len(qv) - len(edge_faces(qf)) + len(qf) == 2 and max(v[0] for v in qv) < 5, "only spot is remeshed")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--qgp", required=True)
+    ap.add_argument("--meshes", required=True)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
+                     test_features, test_drop_bad_components):
+            print(f"== {test.__name__}")
+            if test in (test_unusable_input,):
+                test(args.qgp, tmp)
+            else:
+                test(args.qgp, args.meshes, tmp)
+    print(f"{len(FAILURES)} failure(s)")
+    return 1 if FAILURES else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
