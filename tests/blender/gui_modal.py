@@ -139,7 +139,7 @@ class Steps:
         run["state_at_esc"], _, run["stage_at_esc"] = session.poll()
         run["running"] = binding.STATE_RUNNING
         run["running_timer_calls"] = progress
-        run["esc_at"] = time.time()
+        run["esc_at"] = self.ticks[-1]  # this tick: the stall measure starts here
         bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="PRESS")
         self.step = self.check_esc
 
