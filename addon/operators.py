@@ -56,7 +56,6 @@ def _session_for(obj, source, sharp_angle, isolate):
     return session
 
 
-
 def _report_figures(report, op, started, **figures):
     """The native report's key figures for the custom property 'qgp' of a new object (Object
     Properties > Custom Properties), for artists and pipeline scripts: the target asked for, the

@@ -120,7 +120,7 @@ class WorkerSession(binding.SessionLifetime):
         else:
             how = f"exited with status {code}"
         self._log.seek(0)
-        lines = [l.strip() for l in self._log.read().decode(errors="replace").splitlines() if l.strip()]
+        lines = [s.strip() for s in self._log.read().decode(errors="replace").splitlines() if s.strip()]
         last = f"; its last output: {' | '.join(lines[-3:])}" if lines else ""
         self._conn.close()
         self._conn = None

@@ -42,7 +42,7 @@ def scene_state():
         entry = [obj.name, obj.select_get(), obj.hide_get()]
         if obj.type == "MESH":
             m = obj.data
-            entry += [len(m.vertices), len(m.polygons), [l.name for l in m.uv_layers],
+            entry += [len(m.vertices), len(m.polygons), [layer.name for layer in m.uv_layers],
                       hash(tuple(v.co[:] for v in m.vertices))]
         state.append(entry)
     return [state, len(bpy.data.meshes)]

@@ -46,7 +46,7 @@ def scene_state():
         entry = [obj.name, obj.type, obj.select_get(), obj.hide_get(), tuple(map(tuple, obj.matrix_world))]
         if obj.type == "MESH":
             m = obj.data
-            entry += [len(m.vertices), len(m.polygons), [l.name for l in m.uv_layers],
+            entry += [len(m.vertices), len(m.polygons), [layer.name for layer in m.uv_layers],
                       hash(tuple(v.co[:] for v in m.vertices)), sum(e.use_seam for e in m.edges)]
         state.append(entry)
     return state, len(bpy.data.meshes)
@@ -264,7 +264,8 @@ def test_quad_remesh(binding):
         assert bpy.context.view_layer.objects.active == quad and quad.select_get()
         assert [c.name for c in quad.users_collection] == ["qgp_test_collection"], quad.users_collection
         assert [m.name for m in quad.data.materials] == ["qgp_test_material"], list(quad.data.materials)
-        assert [e for e in scene_state()[0] if e[0] == source.name][0][4:] == before_source[0][4:], "source data changed"
+        after_source = [e for e in scene_state()[0] if e[0] == source.name]
+        assert after_source[0][4:] == before_source[0][4:], "source data changed"
         sizes = {len(p.vertices) for p in quad.data.polygons}
         assert sizes == {4}, f"not all quads: {sizes}"
         # The native report's figures on the object: the mesh has exactly the quads the quantization
@@ -281,7 +282,8 @@ def test_quad_remesh(binding):
             euler_characteristic(quad.data), euler_characteristic(source.data))
         bpy.context.view_layer.update()
         assert quad.parent == source.parent, (quad.parent, source.parent)
-        assert all(abs(a - b) < 1e-6 for ra, rb in zip(quad.matrix_world, source.matrix_world) for a, b in zip(ra, rb)), (
+        assert all(abs(a - b) < 1e-6 for ra, rb in zip(quad.matrix_world, source.matrix_world)
+                   for a, b in zip(ra, rb)), (
             quad.matrix_world, source.matrix_world)
         extra = ""
         if options.get("use_marked_sharp"):
@@ -305,7 +307,7 @@ def mesh_data_state(obj):
     m = obj.data
     return (m.name, len(m.vertices), len(m.edges), len(m.polygons), [tuple(v.co) for v in m.vertices],
             [tuple(p.vertices) for p in m.polygons], [e.use_seam for e in m.edges],
-            [l.name for l in m.uv_layers], [p.select for p in m.polygons], [len(obj.modifiers)])
+            [layer.name for layer in m.uv_layers], [p.select for p in m.polygons], [len(obj.modifiers)])
 
 
 def test_keep_source_visible():
@@ -345,7 +347,10 @@ def test_redo_reuses_session():
     assert bpy.ops.object.qgp_quad_remesh(target_faces=600) == {"FINISHED"}
     session = operators._session_cache[name][1]
     first = session.report()
-    scales = lambda report: [c["scale"] for c in report["quantization"]["components"]]
+
+    def scales(report):
+        return [c["scale"] for c in report["quantization"]["components"]]
+
     assert set(scales(first)) == {1.0}, scales(first)  # solved for this density
     assert first["timings_s"]["seamless_map"] > 0.01, first["timings_s"]
     bpy.ops.ed.undo_push(message="remesh at 600")
@@ -416,7 +421,10 @@ def grid_seam_residual(mesh, layer, quads_per_unit):
             lj = loops[(i + 1) % len(loops)]
             a, b = mesh.loops[li].vertex_index, mesh.loops[lj].vertex_index
             sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
-    rotate = lambda p, r: p if r == 0 else rotate((-p[1], p[0]), r - 1)
+
+    def rotate(p, r):
+        return p if r == 0 else rotate((-p[1], p[0]), r - 1)
+
     worst = 0.0
     for (a, b), pair in sides.items():
         if len(pair) != 2:
@@ -441,7 +449,7 @@ def uv_cut_edges(mesh, layer, tolerance=1e-4):
     `tolerance` in a coordinate at one end): the UV islands' inner boundaries, derived here from the
     loops on their own (not by the add-on's code)."""
     uv = [d.uv[:] for d in layer.data]
-    loop_vertex = [l.vertex_index for l in mesh.loops]
+    loop_vertex = [loop.vertex_index for loop in mesh.loops]
     sides = {}
     for poly in mesh.polygons:
         loops = list(poly.loop_indices)
@@ -487,7 +495,7 @@ def test_grid_uv(binding):
                                             flip_free_copy=False)
         assert result == {"FINISHED"}, result
         layer = obj.data.uv_layers.get("QGP Grid")
-        assert layer is not None, [l.name for l in obj.data.uv_layers]
+        assert layer is not None, [layer.name for layer in obj.data.uv_layers]
         uv = [tuple(d.uv) for d in layer.data]
         assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
         assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
@@ -598,7 +606,8 @@ def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off", "joint.obj")]
     proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
-                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "500", "--uv"],
+                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs
+                          + ["--out", out, "--faces", "500", "--uv"],
                           capture_output=True, text=True)
     report = json.load(open(os.path.join(out, "report.json")))
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
@@ -610,12 +619,12 @@ def test_batch_success():
     assert flipped == {"torus.obj": 0, "truck.obj": 0, "bunny.off": 0, "joint.obj": 0}, flipped
     refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in report["entries"] if e["status"] == "ok"}
     assert refined == {"torus.obj": False, "bunny.off": False, "joint.obj": True}, refined
-    joint_uv = [l for l in open(os.path.join(out, "joint_uv.obj")) if l.startswith("f ")]
-    assert len(joint_uv) > 446 and all(len(l.split()) == 4 for l in joint_uv), len(joint_uv)
+    joint_uv = [line for line in open(os.path.join(out, "joint_uv.obj")) if line.startswith("f ")]
+    assert len(joint_uv) > 446 and all(len(line.split()) == 4 for line in joint_uv), len(joint_uv)
     for name in ("torus", "bunny", "joint"):
         path = os.path.join(out, name + ".obj")
-        faces = [l for l in open(path) if l.startswith("f ")]
-        assert faces and all(len(l.split()) == 5 for l in faces), path
+        faces = [line for line in open(path) if line.startswith("f ")]
+        assert faces and all(len(line.split()) == 5 for line in faces), path
         assert os.path.exists(os.path.join(out, name + "_uv.obj"))
     print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
 
@@ -638,7 +647,7 @@ def test_batch_all_ok():
     assert report["failed"] == 0 and [e["status"] for e in report["entries"]] == ["ok", "ok"], report
     for e in report["entries"]:
         name = os.path.splitext(os.path.basename(e["input"]))[0]
-        faces = [l for l in open(os.path.join(out, name + ".obj")) if l.startswith("f ")]
+        faces = [line for line in open(os.path.join(out, name + ".obj")) if line.startswith("f ")]
         assert e["quads"] == len(faces) > 0 and e["reason"] == "", (e, len(faces))
     print("batch: all inputs ok, exit 0")
 
