@@ -11,6 +11,8 @@ PACKAGES=(
   blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
   libopenblas0-serial                  # optimized BLAS for MUMPS (Ipopt) factorizations: about 2x faster
   patchelf zip unzip                   # extension packaging
+  xvfb xauth                           # a real Blender window for the modal-operator test
+  clang-format-14 python3-flake8 python3-clang-14   # code checks (format, Python style, function length)
 )
 
 missing=()

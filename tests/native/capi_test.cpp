@@ -170,25 +170,24 @@ const Grid& big_grid() {
   return g;
 }
 
-TEST(CApi, CancelTakesEffectWithinOneSecond) {
+// A remesh job of the 1.6 M-triangle grid runs for minutes: cancel is what ends it. The latency is
+// printed, not asserted (a measurement, not a pass/fail criterion); 120 s only catches a hang.
+TEST(CApi, CancelEndsARunningJob) {
   qgp_session* s = create(big_grid());
-  ASSERT_EQ(qgp_job_start(s, QGP_JOB_INTAKE), QGP_OK);
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_EQ(qgp_session_set_option(s, "target_faces", 2000), QGP_OK);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_EQ(qgp_job_cancel(s), QGP_OK);
   int state = -1;
-  const int status = qgp_job_wait(s, 5.0, &state);
+  const int status = qgp_job_wait(s, 120.0, &state);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("cancel: state %d after %.3f s\n", state, seconds);
-  if (state == QGP_STATE_CANCELLED) {
-    EXPECT_EQ(status, QGP_ERR_CANCELLED);
-#ifndef QGP_SANITIZED  // sanitizer builds run several times slower; the figure is printed above
-    EXPECT_LT(seconds, 1.0);
-#endif
-  } else {
-    // The job may have finished before the cancel arrived; it must then be complete.
-    EXPECT_EQ(state, QGP_STATE_DONE);
-  }
+  EXPECT_EQ(state, QGP_STATE_CANCELLED);
+  EXPECT_EQ(status, QGP_ERR_CANCELLED);
+  EXPECT_EQ(qgp::Json::parse(report_of(s))["error"]["code"], "cancelled");
+  int64_t nv = 0, nq = 0;
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY) << "no quads after a cancelled job";
   // A cancelled session can run again.
   EXPECT_EQ(run_intake(s), QGP_OK);
   qgp_session_free(s);
@@ -216,19 +215,47 @@ TEST(CApi, PollFromAnotherThreadAndFreeWhileRunning) {
   qgp_session_free(s);
 }
 
-TEST(CApi, RemeshReportsTheStageThatIsMissing) {
+TEST(CApi, RemeshJobGivesTheQuadsItReports) {
   qgp_session* s = create(make_grid(6));
+  ASSERT_EQ(qgp_session_set_option(s, "target_faces", 100), QGP_OK);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  int state = -1;
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  EXPECT_EQ(state, QGP_STATE_DONE);
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["status"], "ok");
+  int64_t nv = 0, nq = 0;
+  ASSERT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_OK);
+  EXPECT_EQ(nq, report["quad"]["faces"].get<int64_t>());
+  EXPECT_EQ(nq, report["quantization"]["quads_expected"].get<int64_t>());
+  EXPECT_GT(nq, 0);
+  std::vector<double> vertices(3 * nv);
+  std::vector<int32_t> quads(4 * nq), source(nq);
+  ASSERT_EQ(qgp_result_quad_fetch(s, vertices.data(), quads.data(), source.data()), QGP_OK);
+  for (int32_t v : quads) EXPECT_TRUE(v >= 0 && v < nv);
+  for (int32_t f : source) EXPECT_TRUE(f >= 0 && f < 72);  // a face of the 6 x 6 grid
+  for (size_t i = 0; i < vertices.size(); i += 3) EXPECT_EQ(vertices[i + 2], 0.0);  // in the plane
+  qgp_session_free(s);
+}
+
+// Every face has zero area (all vertices on one line): nothing is left to remesh.
+TEST(CApi, FailedJobReportsItsError) {
+  Grid flat = make_grid(3);
+  for (size_t i = 0; i < flat.vertices.size(); i += 3) flat.vertices[i + 1] = 0;
+  qgp_session* s = create(flat);
   ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
   int state = -1;
   const int status = qgp_job_wait(s, -1, &state);
-  if (status != QGP_OK) {
-    EXPECT_EQ(state, QGP_STATE_FAILED);
-    const std::string message = qgp_session_error(s);
-    EXPECT_FALSE(message.empty());
-    const auto report = qgp::Json::parse(report_of(s));
-    EXPECT_EQ(report["status"], "error");
-    EXPECT_EQ(report["error"]["message"], message);
-  }
+  EXPECT_EQ(status, QGP_ERR_INVALID_MESH);
+  EXPECT_EQ(state, QGP_STATE_FAILED);
+  const std::string message = qgp_session_error(s);
+  EXPECT_FALSE(message.empty());
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["status"], "error");
+  EXPECT_EQ(report["error"]["code"], "invalid_mesh");
+  EXPECT_EQ(report["error"]["message"], message);
+  int64_t nv = 0, nq = 0;
+  EXPECT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_ERR_NOT_READY);
   qgp_session_free(s);
 }
 

@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "intake/polygon_soup.h"
 #include "intake/read_mesh_file.h"
 #include "intake/working_mesh.h"
 #include "pipeline/session.h"
@@ -107,7 +108,9 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   StageCounter counter;
   Progress progress = counter.progress();
   std::string message;
+  const double peak_before = peak_resident_mb();
   ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << message;
+  const double peak_after = peak_resident_mb();
   const PolygonMeshMetrics m = expect_valid_output("spot", session, -1);
   EXPECT_EQ(m.quad.topology.boundary_edges, 0);
   EXPECT_NEAR(m.quads, 1500, 0.25 * 1500);
@@ -118,11 +121,35 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
     EXPECT_TRUE(report["timings_s"].contains(stage)) << stage;
     EXPECT_GT(counter.updates[stage], 0) << stage;
   }
-  // The whole process's peak (this test binary, the spot mesh and its stages): tens of MB.
-  EXPECT_GT(report.value("peak_memory_mb", 0.0), 1.0);
-  EXPECT_LT(report.value("peak_memory_mb", 0.0), 1e5);
+  // The process's peak resident memory, read at the end of the run: between the peaks before and
+  // after it.
+  EXPECT_GE(report.value("peak_memory_mb", 0.0), peak_before);
+  EXPECT_LE(report.value("peak_memory_mb", 0.0), peak_after);
   for (double c : session.corner_uv()) EXPECT_TRUE(std::isfinite(c));
   EXPECT_GT(session.cut_edges().size(), 0u);
+}
+
+// Same input, same options: the same quads and UVs, bit for bit, in a fresh session. Camelhead at
+// 2000 quads (a sweep-sized run: Release pass only) gave different quads from run to run while MUMPS ordered its KKT systems with the
+// threaded SCOTCH (the seamless map's Ipopt solves); nefertiti and dragon-genus1 did too.
+TEST(SessionMeshes, SameInputGivesTheSameOutputEveryRun) {
+  const PolygonSoup input = read_mesh_file(test::mesh_path("camelhead.off"));
+  auto run_once = [&](QuadMesh& quads, std::vector<double>& uv) {
+    Session session(input);
+    run_completed(session, Job::Remesh, 2000);
+    ASSERT_NE(session.quad_result(), nullptr);
+    quads = *session.quad_result();
+    uv = session.corner_uv();
+  };
+  QuadMesh first, second;
+  std::vector<double> first_uv, second_uv;
+  run_once(first, first_uv);
+  run_once(second, second_uv);
+  ASSERT_EQ(first.num_quads(), second.num_quads());
+  ASSERT_EQ(first.num_vertices(), second.num_vertices());
+  EXPECT_TRUE(first.Q == second.Q);
+  EXPECT_TRUE(first.V == second.V);  // exact, not approximate
+  EXPECT_EQ(first_uv, second_uv);
 }
 
 // A remesh job with new options (a new density) that completes without running any stage before
@@ -291,8 +318,13 @@ TEST(SessionPipeline, GridUvsCoverTrianglesIntakeRemoved) {
       ++matched;
     }
   }
-  EXPECT_EQ(removed, 224);  // of the 244 repaired, the rest were kept by flipping an edge
-  EXPECT_GT(matched, 224);
+  // Intake removed some of them (collapses; others it kept by flipping an edge), never more than it repaired.
+  int repaired = 0;
+  for (const Json& r : session.report()["input"]["repairs"])
+    if (r["kind"] == "zero_area_faces") repaired = r["count"].get<int>();
+  EXPECT_GT(removed, 0);
+  EXPECT_LE(removed, repaired);
+  EXPECT_GT(matched, removed);
 }
 
 TEST(SessionPipeline, JointKeepsItsSharpEdgesAndFaceItsBoundary) {
@@ -331,11 +363,32 @@ TEST(SessionPipeline, CancelInEveryStageKeepsTheSessionUsable) {
   expect_valid_output("bunny", session, -1);
 }
 
+// A flat n x n square of unit cells, two triangles each: a disk whose cross field has no singularity
+// inside (only the four corners).
+PolygonSoup flat_square(int n) {
+  std::vector<double> v;
+  std::vector<int32_t> f;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) v.insert(v.end(), {double(i), double(j), 0.0});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      f.insert(f.end(), {a, b, c, a, c, d});
+    }
+  return soup_from_triangle_arrays(v.data(), (n + 1) * (n + 1), f.data(), 2 * n * n);
+}
+
 TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
-  // The naive rounding baseline often flips triangles: then the job fails with the reason.
+  // The naive rounding baseline flips triangles around singularities on real meshes: then the job
+  // fails with the reason. Without inner singularities (a flat square) rounding is valid. (A grid
+  // torus does not do: its smoothest cross field has singularities.)
   int completed = 0, refused = 0;
-  for (const char* name : {"torus.obj", "spot.obj", "joint.obj"}) {
-    Session session(read_mesh_file(test::mesh_path(name)));
+  const std::pair<std::string, PolygonSoup> inputs[] = {
+      {"flat square", flat_square(20)},
+      {"spot.obj", read_mesh_file(test::mesh_path("spot.obj"))},
+      {"joint.obj", read_mesh_file(test::mesh_path("joint.obj"))}};
+  for (const auto& [name, soup] : inputs) {
+    Session session(soup);
     RemeshOptions options;
     options.quantizer = Quantizer::Round;
     options.target_faces = 600;
@@ -349,10 +402,29 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
     } else {
       EXPECT_EQ(code, ErrorCode::StageFailed) << name << ": " << message;
       EXPECT_NE(message.find("round"), std::string::npos) << message;
+      std::cout << name << ": " << message << "\n";
       ++refused;
     }
   }
   std::cout << "round quantizer: " << completed << " completed, " << refused << " refused\n";
+  // Both outcomes occur: the flat square's rounding is valid, spot's and joint's are refused.
+  EXPECT_GE(completed, 1);
+  EXPECT_GE(refused, 1);
+}
+
+// Runs whose quads come from the T-mesh layout, because the global integer-grid map keeps a flipped
+// or degenerate triangle, or a wound one-ring, after the untangle ("mesh@target", "@sharp" for
+// features; measured on every run of these meshes). Every other run of the sweeps must take its quads
+// from the integer-grid map, and these from the layout, so that a broken map extraction, or a map
+// that starts working here, fails the test until this list is updated.
+bool quads_expected_from_layout(const std::string& name, double sharp, double target) {
+  static const std::set<std::string> runs = {
+      "armadillo.obj@500",         "camelhead.off@2000",  "decimated-max.obj@2000",
+      "fertility.off@2000",        "stanford-bunny.obj@2000", "mnf07HeadFem_rem_rem_p.obj@500",
+      "mnf07HeadFem_rem_rem_p.obj@2000", "wingnut.obj@2000@40"};
+  std::string run = name + "@" + std::to_string(static_cast<int>(target));
+  if (sharp > 0) run += "@" + std::to_string(static_cast<int>(sharp));
+  return runs.count(run) > 0;
 }
 
 // One session per mesh, so the seamless map and T-mesh are computed once and re-quantized; prints a
@@ -378,6 +450,9 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
       }
       const PolygonMeshMetrics m = expect_valid_output(name, session, sharp);
       if (target >= 8000) EXPECT_LE(m.quad.hausdorff, 0.01) << name;
+      const bool from_layout = session.report()["extraction"]["layout_components"].get<int>() > 0;
+      EXPECT_EQ(from_layout, quads_expected_from_layout(name, sharp, target))
+          << name << "@" << target << ": quads from " << session.report()["extraction"]["components"][0]["path"];
       const Json& t = session.report()["timings_s"];
       auto sec = [&](const char* k) { return t.value(k, 0.0); };
       std::cout << name << " | " << sharp << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices

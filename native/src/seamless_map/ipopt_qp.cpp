@@ -155,10 +155,13 @@ QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progre
   o.SetIntegerValue("print_level", 0);
   o.SetStringValue("sb", "yes");
   o.SetStringValue("linear_solver", "mumps");
-  // METIS ordering, not MUMPS's automatic choice: that picks SCOTCH on some large KKT systems
-  // (dragon-genus1), whose ordering then fails ("hallOrderHfR3Hamdf4: internal error") and MUMPS
-  // ends the process ("Internal error 3 in DMUMPS_ANA_DRIVER", MPI_ABORT).
-  o.SetIntegerValue("mumps_pivot_order", 5);
+  // AMF ordering, chosen explicitly. MUMPS's automatic choice picks SCOTCH on some large KKT systems
+  // (dragon-genus1), whose ordering fails ("hallOrderHfR3Hamdf4: internal error") and ends the process
+  // (MPI_ABORT). Asking for METIS (5) does not help: Debian's MUMPS is built without METIS and silently
+  // falls back to the threaded SCOTCH, whose ordering differs from run to run, so the same input gave
+  // different seamless maps and quads (nefertiti, dragon-genus1, camelhead). AMF is sequential and
+  // deterministic.
+  o.SetIntegerValue("mumps_pivot_order", 2);
   o.SetStringValue("hessian_constant", "yes");
   o.SetStringValue("jac_c_constant", "yes");
   o.SetStringValue("jac_d_constant", "yes");
