@@ -1,15 +1,37 @@
 #!/usr/bin/env bash
 # README command 2: set up, build, and run every test:
+#   0. code checks (cheap, first): function length, C++ format, Python style,
 #   1. the Release build's ctest suite (native GoogleTest, CLI over the mesh set, Blender tests),
-#   2. the same native tests built with AddressSanitizer + UndefinedBehaviorSanitizer,
+#   2. the native and CLI tests built with AddressSanitizer + UndefinedBehaviorSanitizer (every suite
+#      but the long real-mesh sweeps named in SWEEPS, which run in pass 1),
 #   3. the libFuzzer targets for a bounded time from their seed corpora.
+# Any failure, sanitizer report or fuzzer finding fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
 ./scripts/build.sh
 
+echo "== code checks"
+/usr/bin/python3 scripts/check_function_length.py --build build
+# shellcheck disable=SC2046  # one argument per file
+clang-format-14 --dry-run --Werror $(git ls-files 'native/*.cpp' 'native/*.h' 'tests/*.cpp' 'tests/*.h' 'bench/*.cpp' 'bench/*.h')
+/usr/bin/python3 -m flake8
+echo "code checks: function length, clang-format (.clang-format), flake8 (.flake8) clean"
+
+# The long sweeps over the real meshes (ctest names); they get a longer per-test timeout.
+SWEEPS='^(SessionMeshes|LayoutQuadsMeshes|LayoutMeshes|SeamlessMapMeshes|IgmMeshes|CellMapMeshes|CApiMeshes)\.|Benchmark|^cli_uv_out$|^blender_'
+SWEEP_TIMEOUT=2400  # seconds per test
+TEST_TIMEOUT=600
+
+run_ctest() {  # build dir, extra ctest arguments...
+  local dir=$1
+  shift
+  ctest --test-dir "$dir" --output-on-failure -j2 --timeout "$SWEEP_TIMEOUT" -R "$SWEEPS" "$@"
+  ctest --test-dir "$dir" --output-on-failure -j2 --timeout "$TEST_TIMEOUT" -E "$SWEEPS" "$@"
+}
+
 echo "== tests (Release)"
-ctest --test-dir build --output-on-failure -j2
+run_ctest build
 
 echo "== tests (AddressSanitizer + UndefinedBehaviorSanitizer)"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQGP_SANITIZE=ON >/dev/null
@@ -17,19 +39,23 @@ cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-# Real-mesh sweeps (suites named *Meshes*) and benchmarks run in the Release pass only.
-ctest --test-dir build-asan --output-on-failure -j2 -L native -E 'Meshes|Bench'
+ctest --test-dir build-asan --output-on-failure -j2 --timeout "$SWEEP_TIMEOUT" -E "$SWEEPS" -L 'native|cli'
 
 echo "== fuzzing (${QGP_FUZZ_SECONDS:-45} s per target)"
-unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQGP_FUZZ=ON >/dev/null
 cmake --build build-fuzz -j"$(nproc)" --target fuzz_read_mesh fuzz_capi_arrays
 for target in read_mesh capi_arrays; do
   work=$(mktemp -d)
+  status=0
   build-fuzz/bin/fuzz_$target -max_total_time="${QGP_FUZZ_SECONDS:-45}" -timeout=10 -rss_limit_mb=4096 \
-    -artifact_prefix="$work/" "$work" "tests/fuzz/corpus/$target" 2>&1 | grep -E "^Done|ERROR|SUMMARY" || true
-  if ls "$work"/crash-* "$work"/timeout-* "$work"/leak-* "$work"/oom-* >/dev/null 2>&1; then
-    echo "fuzz_$target found a failing input:"; ls "$work"; exit 1
+    -artifact_prefix="$work/" "$work" "tests/fuzz/corpus/$target" >"$work/log" 2>&1 || status=$?
+  grep -E "^Done|ERROR|SUMMARY|runtime error" "$work/log" || true
+  if [ "$status" -ne 0 ] || ls "$work"/crash-* "$work"/timeout-* "$work"/leak-* "$work"/oom-* >/dev/null 2>&1; then
+    echo "fuzz_$target failed (exit status $status):"; tail -40 "$work/log"; ls "$work"; exit 1
+  fi
+  if ! grep -qE "^Done [1-9][0-9]* runs" "$work/log"; then
+    echo "fuzz_$target did not run:"; tail -20 "$work/log"; exit 1
   fi
 done
+
 echo "== all tests passed"
