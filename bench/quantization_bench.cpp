@@ -69,8 +69,8 @@ int main(int argc, char** argv) {
         const QuantizationResult r = quantize(tm, options, progress);
         std::printf("%-8s %8zu %7zu %5d %8lld | %6d %7d %6d %7d %9.1f %8lld %7lld | %7.3f %7.3f %7.3f%s\n",
                     family.c_str(), tm.edges.size(), tm.cells.size(), singular,
-                    static_cast<long long>(r.quads_expected), r.stage1_steps, r.stage2_steps,
-                    r.stage2_rejected_invalid, r.zero_edges, r.objective, static_cast<long long>(r.searches),
+                    static_cast<long long>(r.quads_expected), r.stage1_steps, r.stage2_steps, r.stage2_rejected_invalid,
+                    r.zero_edges, r.objective, static_cast<long long>(r.searches),
                     static_cast<long long>(r.validity_checks), r.stage1_seconds, r.stage2_seconds, r.seconds,
                     r.valid && r.consistency_residual == 0 ? "" : "  INVALID");
         std::printf("         not improving %lld, labelled nodes per search %.0f, validity %.3f s\n",

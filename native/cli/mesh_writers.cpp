@@ -12,8 +12,7 @@
 namespace qgp::cli {
 
 void write_obj(const std::string& path, const TriMesh& mesh,
-               const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv,
-               const std::string& header) {
+               const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv, const std::string& header) {
   const int nf = mesh.num_faces();
   if (corner_uv && corner_uv->rows() != 3 * nf) throw std::runtime_error("uv array does not match the mesh");
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "w"), &std::fclose);

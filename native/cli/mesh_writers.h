@@ -13,8 +13,7 @@ namespace qgp::cli {
 // coordinates share one vt line. header: comment lines written first (without '#').
 // Throws std::runtime_error if the file cannot be written.
 void write_obj(const std::string& path, const TriMesh& mesh,
-               const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv,
-               const std::string& header);
+               const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv, const std::string& header);
 
 // Writes a quad mesh as Wavefront OBJ (faces counter-clockwise), header as for write_obj.
 // Throws std::runtime_error if the file cannot be written.

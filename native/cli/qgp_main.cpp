@@ -40,8 +40,9 @@ void write_stderr(const char* text) {
 
 void exit_during_pipeline() {
   if (!g_pipeline_running.load()) return;
-  write_stderr("qgp: internal error: a library under the pipeline ended the process (its message, if any, is "
-               "above); no output was written\n");
+  write_stderr(
+      "qgp: internal error: a library under the pipeline ended the process (its message, if any, is "
+      "above); no output was written\n");
   _exit(4);
 }
 
@@ -95,21 +96,22 @@ void add_commands(CLI::App& app, CommandLine& cl) {
   remesh->add_option("--edge-length", cl.options.edge_length, "target quad edge length, in model units")
       ->check(CLI::NonNegativeNumber)
       ->excludes(faces);
-  remesh->add_option("--sharp-angle", cl.options.sharp_angle_deg,
-                     "keep edges whose faces meet at more than DEG degrees as feature curves")
+  remesh
+      ->add_option("--sharp-angle", cl.options.sharp_angle_deg,
+                   "keep edges whose faces meet at more than DEG degrees as feature curves")
       ->check(CLI::Range(0.0, 180.0));
   remesh->add_option("--features", cl.features, "feature edges: a file with one 0-based vertex-index pair per line");
   remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
   remesh->add_option("--layout-out", cl.layout_out, "write the T-mesh (motorcycle graph) as .obj polylines");
-  remesh->add_option("--quantizer", cl.quantizer, "greedy (the paper's, default) or round (the direct-rounding baseline)")
+  remesh
+      ->add_option("--quantizer", cl.quantizer, "greedy (the paper's, default) or round (the direct-rounding baseline)")
       ->check(CLI::IsMember({"greedy", "round"}));
 }
 
 // Parses the command line. On --help, or on a malformed command line (exit code 1, with the reason
 // and the usage on stderr), returns false and sets *exit_code.
 bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
-  CLI::App app("qgp: quad meshes and integer-grid maps from triangle meshes (Quantized Global Parametrization)",
-               "qgp");
+  CLI::App app("qgp: quad meshes and integer-grid maps from triangle meshes (Quantized Global Parametrization)", "qgp");
   add_commands(app, *cl);
   try {
     app.parse(argc, argv);
@@ -142,8 +144,7 @@ std::vector<std::array<int, 2>> read_feature_pairs(const std::string& path) {
     if (!(ls >> a)) continue;  // blank or comment line
     std::string rest;
     if (!(ls >> b) || (ls >> rest) || a < 0 || b < 0 || a > INT32_MAX || b > INT32_MAX)
-      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "features file '" + path + "' line " +
-                                                            std::to_string(line_no) +
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "features file '" + path + "' line " + std::to_string(line_no) +
                                                             ": expected two vertex indices");
     pairs.push_back({static_cast<int>(a), static_cast<int>(b)});
   }
@@ -163,11 +164,12 @@ void write_report(const std::string& path, const qgp::Json& report) {
 void print_intake_summary(const qgp::Json& report) {
   if (!report.contains("input")) return;
   const qgp::Json& in = report["input"];
-  std::cout << "vertices " << in["vertices"] << ", faces " << in["faces"] << " (input "
-            << in["input_vertices"] << " / " << in["input_faces"] << ")\n";
-  std::cout << "components " << in["components"] << ", genus " << in["genus"].dump()
-            << ", boundary loops " << in["boundary_loops"].dump() << "\n";
-  for (const auto& r : in["repairs"]) std::cout << "repair " << r["kind"].get<std::string>() << ": " << r["count"] << "\n";
+  std::cout << "vertices " << in["vertices"] << ", faces " << in["faces"] << " (input " << in["input_vertices"] << " / "
+            << in["input_faces"] << ")\n";
+  std::cout << "components " << in["components"] << ", genus " << in["genus"].dump() << ", boundary loops "
+            << in["boundary_loops"].dump() << "\n";
+  for (const auto& r : in["repairs"])
+    std::cout << "repair " << r["kind"].get<std::string>() << ": " << r["count"] << "\n";
   for (const auto& w : in["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";
 }
 

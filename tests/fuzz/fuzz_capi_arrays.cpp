@@ -27,7 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (int k = 0; k < 3; ++k) triangles.push_back(static_cast<int32_t>(data[pos++] % raw_index_range) - 1);
   }
   qgp_session* s = nullptr;
-  if (qgp_session_create(vertices.data(), nv, triangles.data(), static_cast<int64_t>(triangles.size() / 3), &s) != QGP_OK)
+  if (qgp_session_create(vertices.data(), nv, triangles.data(), static_cast<int64_t>(triangles.size() / 3), &s) !=
+      QGP_OK)
     return 0;
   if (data[1] & 2) qgp_session_set_option(s, "drop_bad_components", 1);
   if (qgp_job_start(s, QGP_JOB_INTAKE) == QGP_OK) {

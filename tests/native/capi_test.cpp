@@ -3,9 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <cstdio>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,9 +35,9 @@ Grid make_grid(int n) {
 
 qgp_session* create(const Grid& g) {
   qgp_session* s = nullptr;
-  EXPECT_EQ(qgp_session_create(g.vertices.data(), g.vertices.size() / 3, g.triangles.data(),
-                               g.triangles.size() / 3, &s),
-            QGP_OK);
+  EXPECT_EQ(
+      qgp_session_create(g.vertices.data(), g.vertices.size() / 3, g.triangles.data(), g.triangles.size() / 3, &s),
+      QGP_OK);
   return s;
 }
 
@@ -233,7 +233,7 @@ TEST(CApi, RemeshJobGivesTheQuadsItReports) {
   std::vector<int32_t> quads(4 * nq), source(nq);
   ASSERT_EQ(qgp_result_quad_fetch(s, vertices.data(), quads.data(), source.data()), QGP_OK);
   for (int32_t v : quads) EXPECT_TRUE(v >= 0 && v < nv);
-  for (int32_t f : source) EXPECT_TRUE(f >= 0 && f < 72);  // a face of the 6 x 6 grid
+  for (int32_t f : source) EXPECT_TRUE(f >= 0 && f < 72);                           // a face of the 6 x 6 grid
   for (size_t i = 0; i < vertices.size(); i += 3) EXPECT_EQ(vertices[i + 2], 0.0);  // in the plane
   qgp_session_free(s);
 }
@@ -325,8 +325,10 @@ TEST(CApiMeshes, UvMeshIsRefinedWhereTheGlobalMapStaysFlipped) {
     ASSERT_EQ(qgp_result_uv_mesh_counts(s, &nv, &nt, &refined), QGP_OK);
     ASSERT_EQ(qgp_intake_counts(s, &nv_intake, &nt_intake, nullptr), QGP_OK);
     EXPECT_EQ(refined, used ? 1 : 0);
-    if (used) EXPECT_GT(nt, nt_intake);
-    else EXPECT_EQ(nt, nt_intake);
+    if (used)
+      EXPECT_GT(nt, nt_intake);
+    else
+      EXPECT_EQ(nt, nt_intake);
     EXPECT_GE(nv, nv_intake);
     std::vector<double> vertices(3 * nv), uv(6 * nt);
     std::vector<int32_t> triangles(3 * nt), source(nt);

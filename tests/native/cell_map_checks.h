@@ -39,7 +39,8 @@ inline CellMapStats expect_cell_map_invariants(const std::string& where, const T
   for (int t = 0; t < m.num_faces(); ++t) {
     const IVec2 &a = p.uv[3 * t], &b = p.uv[3 * t + 1], &c = p.uv[3 * t + 2];
     flipped += orient2d_exact(a, b, c) < 0;
-    doubled_area += static_cast<__int128>(b[0] - a[0]) * (c[1] - a[1]) - static_cast<__int128>(b[1] - a[1]) * (c[0] - a[0]);
+    doubled_area +=
+        static_cast<__int128>(b[0] - a[0]) * (c[1] - a[1]) - static_cast<__int128>(b[1] - a[1]) * (c[0] - a[0]);
     area += 0.5 * m.face_normal_unnormalized(t).norm();
     EXPECT_TRUE(map.source_face[t] >= 0 && map.source_face[t] < mesh.num_faces()) << where;
   }
@@ -57,14 +58,16 @@ inline CellMapStats expect_cell_map_invariants(const std::string& where, const T
   EXPECT_EQ(mismatched, 0) << where << ": transitions not exact";
   EXPECT_EQ(off_grid, 0) << where << ": translations off the integers";
   EXPECT_TRUE(doubled_area == static_cast<__int128>(2 * q.quads_expected) * p.one() * p.one())
-      << where << ": area " << static_cast<double>(doubled_area) / 2 / p.one() / p.one() << " for " << q.quads_expected << " quads";
+      << where << ": area " << static_cast<double>(doubled_area) / 2 / p.one() / p.one() << " for " << q.quads_expected
+      << " quads";
   EXPECT_NEAR(area, source_area, 1e-9 * source_area) << where;
   EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), mesh.num_vertices() - mesh.num_edges() + mesh.num_faces())
       << where;
   for (const TMeshNode& node : tm.nodes)  // working-mesh vertices keep their index
     if (node.mesh_vertex >= 0 && node.kind != TMeshNode::Kind::TJunction && node.kind != TMeshNode::Kind::Crossing)
       for (int h : outgoing_halfedges(m, node.mesh_vertex))
-        EXPECT_TRUE(p.uv[h][0] % p.one() == 0 && p.uv[h][1] % p.one() == 0) << where << " node at vertex " << node.mesh_vertex;
+        EXPECT_TRUE(p.uv[h][0] % p.one() == 0 && p.uv[h][1] % p.one() == 0)
+            << where << " node at vertex " << node.mesh_vertex;
   for (int h = 0; h < m.num_halfedges(); ++h)
     if (m.opposite[h] < 0) {
       const IVec2 &a = p.uv[h], &b = p.uv[TriMesh::next(h)];

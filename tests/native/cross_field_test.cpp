@@ -41,7 +41,8 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
   // Unit tangent directions.
   int bad_direction = -1;
   for (int f = 0; f < nf && bad_direction < 0; ++f)
-    if (std::abs(field.direction[f].norm() - 1) > 1e-9 || std::abs(field.direction[f].dot(test::unit_normal(mesh, f))) > 1e-9)
+    if (std::abs(field.direction[f].norm() - 1) > 1e-9 ||
+        std::abs(field.direction[f].dot(test::unit_normal(mesh, f))) > 1e-9)
       bad_direction = f;
   EXPECT_EQ(bad_direction, -1) << "direction is not a unit tangent";
 
@@ -50,7 +51,8 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
   for (int e = 0; e < ne && bad_feature < 0; ++e) {
     const bool boundary = mesh.is_boundary_edge(e);
     bool expected = !boundary && !caller_features.empty() && caller_features[e];
-    if (!boundary && sharp_angle_deg >= 0 && test::dihedral_angle(mesh, e) > sharp_angle_deg * M_PI / 180) expected = true;
+    if (!boundary && sharp_angle_deg >= 0 && test::dihedral_angle(mesh, e) > sharp_angle_deg * M_PI / 180)
+      expected = true;
     if (static_cast<bool>(field.feature_edge[e]) != expected) bad_feature = e;
   }
   EXPECT_EQ(bad_feature, -1) << "feature flag differs from the dihedral/caller features";
@@ -227,10 +229,11 @@ TEST_P(CrossFieldOverMeshes, InvariantsPerComponent) {
     for (char kind : field.constrained_face) compromises += kind >= 2;
     if (HasFailure()) break;
   }
-  std::printf("[ figures  ] %-28s sharp %3.0f  components %4zu  faces %7d  singularities %5d  feature edges %5d  "
-              "compromise faces %4d  over-constrained faces %3d  collapsed sectors %3d  resolved sectors %3d\n",
-              c.file.c_str(), c.sharp_angle_deg, intake.components.size(), intake.mesh.num_faces(), singularities,
-              features, compromises, overconstrained, collapsed, resolved);
+  std::printf(
+      "[ figures  ] %-28s sharp %3.0f  components %4zu  faces %7d  singularities %5d  feature edges %5d  "
+      "compromise faces %4d  over-constrained faces %3d  collapsed sectors %3d  resolved sectors %3d\n",
+      c.file.c_str(), c.sharp_angle_deg, intake.components.size(), intake.mesh.num_faces(), singularities, features,
+      compromises, overconstrained, collapsed, resolved);
   if (c.sharp_angle_deg >= 0 && intake.components.size() == 1) EXPECT_GT(features, 0);
 }
 
@@ -322,7 +325,8 @@ TEST(CrossField, SmoothTorusAndPlanarGrid) {
       EXPECT_EQ(field.vertex_index[v], corner ? 1 : 0) << "vertex " << v;
     }
     for (int f = 0; f < grid.num_faces(); ++f)
-      EXPECT_NEAR(std::abs(std::remainder(std::atan2(field.direction[f].y(), field.direction[f].x()), kQuarter)), 0, 1e-9);
+      EXPECT_NEAR(std::abs(std::remainder(std::atan2(field.direction[f].y(), field.direction[f].x()), kQuarter)), 0,
+                  1e-9);
   }
 }
 

@@ -195,7 +195,8 @@ TEST(CutGraph, TorusWithoutSingularitiesKeepsTwoLoops) {
   // cut-open disc shows that they are not contractible.
   std::vector<int> degree(torus.mesh.num_vertices(), 0);
   for (int e = 0; e < torus.mesh.num_edges(); ++e)
-    if (cut.is_cut[e]) ++degree[torus.mesh.from(torus.mesh.edge_halfedge[e])], ++degree[torus.mesh.to(torus.mesh.edge_halfedge[e])];
+    if (cut.is_cut[e])
+      ++degree[torus.mesh.from(torus.mesh.edge_halfedge[e])], ++degree[torus.mesh.to(torus.mesh.edge_halfedge[e])];
   int branch_points = 0;
   for (int d : degree) {
     EXPECT_NE(d, 1);

@@ -109,8 +109,8 @@ TEST(FieldSession, CachesFieldUntilFeaturesChange) {
   options.sharp_angle_deg = -1;
   const TriMesh& mesh = session.intake()->mesh;
   for (int h = 0; h < 30; ++h)
-    options.feature_edges.push_back({session.intake()->input_vertex[mesh.from(h)],
-                                     session.intake()->input_vertex[mesh.to(h)]});
+    options.feature_edges.push_back(
+        {session.intake()->input_vertex[mesh.from(h)], session.intake()->input_vertex[mesh.to(h)]});
   session.set_options(options);
   Recorder fourth;
   Progress p4 = fourth.progress();

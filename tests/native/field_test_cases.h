@@ -33,8 +33,8 @@ inline std::string case_name(const ::testing::TestParamInfo<FieldCase>& info) {
 inline std::vector<FieldCase> field_cases() {
   std::vector<FieldCase> cases;
   for (const std::string& f : manifold_mesh_files()) cases.push_back({f, -1});
-  for (const char* f : {"fandisk.obj", "joint.obj", "wingnut.obj", "joint_rem_p.obj",
-                        "mnf07HeadFem_rem_rem_p.obj", "rocker-arm.obj"})
+  for (const char* f :
+       {"fandisk.obj", "joint.obj", "wingnut.obj", "joint_rem_p.obj", "mnf07HeadFem_rem_rem_p.obj", "rocker-arm.obj"})
     cases.push_back({f, 40});
   // One sector between two feature edges at vertex 732 whose rounding ties (read in double
   // precision; in float precision it does not collapse).

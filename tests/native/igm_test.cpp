@@ -6,19 +6,19 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <map>
-#include <cstdlib>
 #include <optional>
 #include <set>
 #include <string>
 #include <tuple>
 
+#include "cell_map_checks.h"
 #include "core/error.h"
 #include "core/sanitize_isolines.h"
 #include "core/timer.h"
-#include "cell_map_checks.h"
 #include "cross_field/cross_field.h"
 #include "cut_graph/cut_graph.h"
 #include "igm/integer_grid_map.h"
@@ -80,10 +80,10 @@ Chain run_chain(TriMesh mesh, double sharp_angle, double seamless_quads, double 
   c.seamless = compute_seamless_map(c.mesh, c.field, c.cut, so, progress);
   SanitizeOptions sanitize;
   sanitize.fraction_bits = 24;
-  c.sanitized = sanitize_with_isolines(c.mesh, c.seamless.param,
-                                       isoline_constraints(c.mesh, c.seamless.param, c.field.feature_edge, true),
-                                       sanitize)
-                    .param;
+  c.sanitized =
+      sanitize_with_isolines(c.mesh, c.seamless.param,
+                             isoline_constraints(c.mesh, c.seamless.param, c.field.feature_edge, true), sanitize)
+          .param;
   TraceOptions to;
   to.feature_edges = c.field.feature_edge;
   c.tmesh = trace_tmesh(c.mesh, c.sanitized, to, progress);
@@ -174,8 +174,9 @@ void print_row(const Figures& f) {
             << std::setw(6) << f.faces << " | " << std::setw(6) << f.quads_expected << " | " << std::setw(6) << f.quads
             << " | " << f.stats.penalty_iterations << " | " << (f.stats.fallback_used ? "yes" : "no") << " | "
             << f.stats.flipped_triangles << "/" << f.stats.degenerate_triangles << " | " << std::setprecision(3)
-            << f.stats.max_integer_residual << " | " << f.stats.penalty_integer_residual << " | " << f.stats.seconds << " | " << f.seconds_before << " | "
-            << f.stats.path << (f.failure.empty() ? "" : " | FAILED: " + f.failure) << std::endl;
+            << f.stats.max_integer_residual << " | " << f.stats.penalty_integer_residual << " | " << f.stats.seconds
+            << " | " << f.seconds_before << " | " << f.stats.path
+            << (f.failure.empty() ? "" : " | FAILED: " + f.failure) << std::endl;
 }
 
 // Runs the igm on a prepared chain and asserts every invariant.
@@ -301,11 +302,12 @@ void expect_opening(const std::vector<std::tuple<std::string, double, int>>& run
     CellMapOptions opening;
     opening.cone_turns = cone_quarter_turns(c.mesh, c.field);
     const CellMapStats after = test::expect_cell_map_invariants(where, c.mesh, c.tmesh, c.quantization, opening);
-    if (after.degenerate_before_opening > 0) EXPECT_LT(after.degenerate_triangles, after.degenerate_before_opening) << where;
+    if (after.degenerate_before_opening > 0)
+      EXPECT_LT(after.degenerate_triangles, after.degenerate_before_opening) << where;
     EXPECT_LE(after.degenerate_triangles, before.degenerate_triangles) << where;
     std::cout << "[cell map] " << where << ": degenerate " << before.degenerate_triangles << " -> "
-              << after.degenerate_triangles << " of " << after.faces << ", " << after.opened_vertices << " vertices moved, "
-              << after.seconds << " s" << std::endl;
+              << after.degenerate_triangles << " of " << after.faces << ", " << after.opened_vertices
+              << " vertices moved, " << after.seconds << " s" << std::endl;
   }
 }
 
@@ -313,7 +315,9 @@ TEST(CellMap, OpeningKeepsTheMapExactAndFlipFreeAndOpensTriangles) {
   expect_opening({{"joint.obj", -1, 500}, {"joint.obj", 40, 500}});
 }
 
-TEST(CellMapMeshes, OpeningOnLargerMeshes) { expect_opening({{"fertility.off", -1, 2000}, {"camelhead.off", -1, 500}}); }
+TEST(CellMapMeshes, OpeningOnLargerMeshes) {
+  expect_opening({{"fertility.off", -1, 2000}, {"camelhead.off", -1, 500}});
+}
 
 TEST(CellMap, MismatchedInputsAreRefused) {
   const Chain c = run_chain(test::make_grid_cube(4).mesh, 40, 96, 96);
@@ -340,7 +344,8 @@ TEST(Igm, CancelStopsWithCancelledError) {
   IgmOptions options;
   options.edge_length = c.edge_length;
   try {
-    IntegerGridMapSolver solver(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options, progress);
+    IntegerGridMapSolver solver(c.mesh, c.field, c.cut, c.seamless, c.sanitized, c.tmesh, c.quantization, options,
+                                progress);
     solver.solve(IgmAttempt::Default, 0, 1);
     ADD_FAILURE() << "no exception";
   } catch (const Error& e) {
@@ -361,7 +366,8 @@ const std::set<std::string> kEarlierStageFailures = {"armadillo.obj", "block.obj
 
 void sweep(const std::vector<std::string>& names, const std::vector<int>& targets = {500, 2000}) {
   std::cout << "[igm] mesh | target | tri faces | quads expected | quads | penalty iterations | fallback | "
-               "flipped/degenerate | max integer residual (hard / penalty) | igm s | chain s | path" << std::endl;
+               "flipped/degenerate | max integer residual (hard / penalty) | igm s | chain s | path"
+            << std::endl;
   for (const std::string& name : names) {
     const IntakeResult intake = test::load_mesh(name);
     std::optional<Chain> chain;
@@ -425,7 +431,8 @@ TEST(Igm, RowsHoldForContinuousLengthsAndAreConsistentForIntegerOnes) {
     EXPECT_LT(worst, 1e-9);
     ParametrizationProblem problem(c.mesh, c.seamless.param.rotation, c.seamless.param.is_cut, c.cut.frame_u,
                                    c.edge_length / c.quantization.scale);
-    for (const Isoline& line : select_isolines(c.mesh, c.field, c.cut).isolines) problem.add_isoline(line.halfedge, line.axis);
+    for (const Isoline& line : select_isolines(c.mesh, c.field, c.cut).isolines)
+      problem.add_isoline(line.halfedge, line.axis);
     std::vector<double> x(c.quantization.x.begin(), c.quantization.x.end());
     for (const IgmRow& r : integer_grid_rows(c.mesh, c.sanitized, c.tmesh, x, root))
       if (!r.terms.empty()) problem.add_linear_constraint(r.terms, r.rhs);

@@ -23,18 +23,29 @@ struct Expected {
 // From ../shared/meshes/README.md (manifold meshes; genus and boundary loops per component).
 const std::map<std::string, Expected>& expected_table() {
   static const std::map<std::string, Expected> table = {
-      {"spot.obj", {1, {0}, {0}}},          {"bunny.off", {1, {0}, {0}}},
-      {"armadillo.obj", {1, {0}, {0}}},     {"nefertiti.obj", {1, {0}, {0}}},
-      {"igea.ply", {1, {0}, {0}}},          {"dragon-genus1.obj", {1, {1}, {0}}},
-      {"torus.obj", {1, {1}, {0}}},         {"rocker-arm.obj", {1, {1}, {0}}},
-      {"kitten.obj", {1, {1}, {0}}},        {"fertility.off", {1, {4}, {0}}},
+      {"spot.obj", {1, {0}, {0}}},
+      {"bunny.off", {1, {0}, {0}}},
+      {"armadillo.obj", {1, {0}, {0}}},
+      {"nefertiti.obj", {1, {0}, {0}}},
+      {"igea.ply", {1, {0}, {0}}},
+      {"dragon-genus1.obj", {1, {1}, {0}}},
+      {"torus.obj", {1, {1}, {0}}},
+      {"rocker-arm.obj", {1, {1}, {0}}},
+      {"kitten.obj", {1, {1}, {0}}},
+      {"fertility.off", {1, {4}, {0}}},
       {"mnf07HeadFem_rem_rem_p.obj", {1, {9}, {0}}},
-      {"fandisk.obj", {1, {0}, {0}}},       {"block.obj", {1, {3}, {0}}},
-      {"joint.obj", {1, {2}, {0}}},         {"joint_rem_p.obj", {1, {2}, {0}}},
-      {"wingnut.obj", {1, {0}, {0}}},       {"stanford-bunny.obj", {1, {0}, {5}}},
-      {"face.obj", {1, {0}, {1}}},          {"camelhead.off", {1, {0}, {1}}},
-      {"decimated-max.obj", {1, {0}, {0}}}, {"beetle.off", {1, {0}, {11}}},
-      {"cow.obj", {1, {0}, {0}}},           {"featuretype.ply", {852, {}, {}}},
+      {"fandisk.obj", {1, {0}, {0}}},
+      {"block.obj", {1, {3}, {0}}},
+      {"joint.obj", {1, {2}, {0}}},
+      {"joint_rem_p.obj", {1, {2}, {0}}},
+      {"wingnut.obj", {1, {0}, {0}}},
+      {"stanford-bunny.obj", {1, {0}, {5}}},
+      {"face.obj", {1, {0}, {1}}},
+      {"camelhead.off", {1, {0}, {1}}},
+      {"decimated-max.obj", {1, {0}, {0}}},
+      {"beetle.off", {1, {0}, {11}}},
+      {"cow.obj", {1, {0}, {0}}},
+      {"featuretype.ply", {852, {}, {}}},
   };
   return table;
 }
@@ -91,7 +102,8 @@ TEST_P(IntakeOverMeshes, ClassifiesOrRefusesClearly) {
 INSTANTIATE_TEST_SUITE_P(SharedMeshes, IntakeOverMeshes, ::testing::ValuesIn(test::all_mesh_files()),
                          [](const auto& info) {
                            std::string n = info.param;
-                           for (char& ch : n) if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           for (char& ch : n)
+                             if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
                            return n;
                          });
 
@@ -181,10 +193,10 @@ TEST(Intake, RejectsBadInputWithClearMessages) {
 TEST(Intake, RepairsOrientationDuplicatesAndPolygons) {
   PolygonSoup s;
   s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}, {5, 5, 5}};
-  const int a[4] = {0, 1, 2, 3};    // a quad
-  const int b[3] = {1, 2, 4};       // inconsistently oriented w.r.t. the quad
-  const int c[3] = {2, 4, 5};       // wait: consistent with b
-  const int d[3] = {4, 2, 1};       // duplicate of b (other orientation)
+  const int a[4] = {0, 1, 2, 3};  // a quad
+  const int b[3] = {1, 2, 4};     // inconsistently oriented w.r.t. the quad
+  const int c[3] = {2, 4, 5};     // wait: consistent with b
+  const int d[3] = {4, 2, 1};     // duplicate of b (other orientation)
   s.add_face(a, 4);
   s.add_face(b, 3);
   s.add_face(c, 3);
@@ -222,8 +234,8 @@ TEST(Intake, RefusesNonOrientableMoebiusStrip) {
     const double t = 2 * M_PI * i / n;
     for (int side : {-1, 1}) {
       const double w = 0.3 * side;
-      s.positions.push_back({(2 + w * std::cos(t / 2)) * std::cos(t), (2 + w * std::cos(t / 2)) * std::sin(t),
-                             w * std::sin(t / 2)});
+      s.positions.push_back(
+          {(2 + w * std::cos(t / 2)) * std::cos(t), (2 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2)});
     }
   }
   for (int i = 0; i < n; ++i) {

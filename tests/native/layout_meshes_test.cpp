@@ -8,8 +8,8 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/error.h"
 #include "cell_map_checks.h"
+#include "core/error.h"
 #include "intake/read_mesh_file.h"
 #include "pipeline/session.h"
 #include "test_support.h"
@@ -89,7 +89,8 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
     // slivers between two feature edges); those are the only gaps, and rare.
     for (char f : state.feature_edges) features += f;
     uncovered = uncovered_wall_edges(state.mesh, state.feature_edges, tm);
-    EXPECT_EQ(uncovered_wall_edges(state.mesh, state.traced->isoline_edges, tm), 0) << where << ": walls not covered by T-edges";
+    EXPECT_EQ(uncovered_wall_edges(state.mesh, state.traced->isoline_edges, tm), 0)
+        << where << ": walls not covered by T-edges";
     EXPECT_EQ(uncovered, dropped) << where;
     EXPECT_LE(dropped, 0.01 * features) << where;
   }
@@ -111,7 +112,8 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
             << " | " << q.stage1_steps << " | " << q.stage2_steps << " | " << q.objective << " | " << q.zero_edges
             << " | " << q.seconds << " | " << cells.faces << " | " << cells.degenerate_triangles << " ("
             << cells.collapsed_cell_triangles << ") | " << cells.seconds;
-  if (walls) std::cout << " | " << features << " feature edges, " << dropped << " dropped, " << uncovered << " uncovered";
+  if (walls)
+    std::cout << " | " << features << " feature edges, " << dropped << " dropped, " << uncovered << " uncovered";
   std::cout << " |" << std::endl;
 }
 

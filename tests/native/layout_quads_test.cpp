@@ -10,9 +10,9 @@
 #include <limits>
 
 #include "intake/read_mesh_file.h"
+#include "metrics/polygon_metrics.h"
 #include "pipeline/session.h"
 #include "quad_extraction/layout_quads.h"
-#include "metrics/polygon_metrics.h"
 #include "quad_extraction/untangle_quads.h"
 #include "test_support.h"
 
@@ -67,8 +67,8 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         const ComponentState& state = session.components()[c];
         const std::string where = name + " component " + std::to_string(c) + " at " + std::to_string(int(target));
         Progress progress;
-        const LayoutQuads layout =
-            extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, state.quantization->result.x, progress);
+        const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
+                                                        state.quantization->result.x, progress);
         const QuadMesh& quads = layout.quads;
         EXPECT_EQ(quads.num_quads(), state.quantization->result.quads_expected) << where;
         const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(quads), state.mesh, -1, progress);
@@ -92,7 +92,8 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         const TriangleBvh bvh(state.mesh);
         const double diagonal = state.mesh.bounding_box_diagonal();
         for (int v = 0; v < quads.num_vertices(); ++v) {
-          EXPECT_LE((untangled.V.row(v) - quads.V.row(v)).norm(), 2 * reach[v] * (1 + 1e-9)) << where << " vertex " << v;
+          EXPECT_LE((untangled.V.row(v) - quads.V.row(v)).norm(), 2 * reach[v] * (1 + 1e-9))
+              << where << " vertex " << v;
           EXPECT_LT(std::sqrt(bvh.closest_point(untangled.V.row(v).transpose()).squared_distance), 1e-9 * diagonal)
               << where << " vertex " << v;
         }

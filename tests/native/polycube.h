@@ -17,13 +17,13 @@
 namespace qgp::test {
 
 struct PolycubeSpec {
-  std::array<std::vector<double>, 3> grid;   // increasing coordinates of the grid lines per axis
-  std::set<std::array<int, 3>> voxels;       // occupied cells (i, j, k)
+  std::array<std::vector<double>, 3> grid;                  // increasing coordinates of the grid lines per axis
+  std::set<std::array<int, 3>> voxels;                      // occupied cells (i, j, k)
   std::set<std::pair<std::array<int, 3>, int>> open_faces;  // (voxel, direction 0..5) left out
-  int subdivisions = 1;        // each voxel face: s x s squares
+  int subdivisions = 1;                                     // each voxel face: s x s squares
   bool random_diagonals = false;
-  double jitter = 0;           // random move of non-corner vertices (x spacing); <= 0.15 keeps
-                               // every triangle positive
+  double jitter = 0;  // random move of non-corner vertices (x spacing); <= 0.15 keeps
+                      // every triangle positive
   unsigned seed = 1;
   // All charts rotated by this angle: still seamless (the transitions keep their quarter turns),
   // but isolines run obliquely through the triangles; creases are no isolines then.

@@ -17,13 +17,13 @@
 
 #include "core/error.h"
 #include "core/timer.h"
-#include "quad_extraction/quad_extraction.h"
-#include "metrics/quad_metrics.h"
-#include "quad_extraction/surface_projection.h"
-#include "quad_extraction/untangle_quads.h"
+#include "cross_field/cross_field.h"
 #include "igm/integer_grid_map.h"
 #include "igm/untangle_map.h"
-#include "cross_field/cross_field.h"
+#include "metrics/quad_metrics.h"
+#include "quad_extraction/quad_extraction.h"
+#include "quad_extraction/surface_projection.h"
+#include "quad_extraction/untangle_quads.h"
 #include "test_support.h"
 
 namespace qgp {
@@ -136,7 +136,8 @@ SyntheticParametrized make_random_torus(int nu, int nv, double step, double spli
         const int m = static_cast<int>(positions.size());
         positions.push_back(torus_point(i + 0.5, j + 0.5));
         const Vec2 qm = Vec2(i + 0.5, j + 0.5) * step;
-        for (int k = 0; k < 4; ++k) tris.push_back({c[k], c[(k + 1) % 4], m}), uvs.push_back({q[k], q[(k + 1) % 4], qm});
+        for (int k = 0; k < 4; ++k)
+          tris.push_back({c[k], c[(k + 1) % 4], m}), uvs.push_back({q[k], q[(k + 1) % 4], qm});
       } else if (uniform(rng) < 0.5) {
         tris.push_back({c[0], c[1], c[2]}), uvs.push_back({q[0], q[1], q[2]});
         tris.push_back({c[0], c[2], c[3]}), uvs.push_back({q[0], q[2], q[3]});
@@ -165,8 +166,10 @@ SyntheticParametrized make_glued_sectors(int k, int n, unsigned seed) {
   std::map<std::array<int, 3>, int> vertex_id;
   std::vector<Vec3> positions;
   auto vid = [&](int s, int u, int v) {
-    if (u == 0 && v == 0) s = 0;
-    else if (u == 0) s = (s + 1) % k, u = v, v = 0;
+    if (u == 0 && v == 0)
+      s = 0;
+    else if (u == 0)
+      s = (s + 1) % k, u = v, v = 0;
     auto it = vertex_id.emplace(std::array<int, 3>{s, u, v}, static_cast<int>(positions.size())).first;
     if (it->second == static_cast<int>(positions.size())) {
       const double theta = (s + std::atan2(double(v), double(u)) / (M_PI / 2)) * 2 * M_PI / k;
@@ -277,8 +280,8 @@ QuadExtraction extract_and_check(const std::string& label, const TriMesh& mesh, 
   }
   const QuadMesh& q = r.quads;
   const QuadExtractionStats& s = r.stats;
-  EXPECT_EQ(s.flipped_triangles + s.degenerate_triangles + s.failed_traces + s.inconsistent_segments +
-                s.non_quad_faces, 0);
+  EXPECT_EQ(s.flipped_triangles + s.degenerate_triangles + s.failed_traces + s.inconsistent_segments + s.non_quad_faces,
+            0);
   // Quad count = parametric area = the construction's expected count.
   EXPECT_TRUE(s.area_is_integral);
   EXPECT_EQ(s.expected_quads, expected_quads);
@@ -553,7 +556,9 @@ TEST_P(UntangleMapFolds, AreUnfoldedAndEverythingElseKept) {
   for (int h = 0; h < mesh.num_halfedges(); ++h) {
     const int v = mesh.from(h), w = mesh.to(h);
     if (cube_faces(v).size() == 3 || touched[v]) continue;
-    const Kind kind = !on_cut[v] ? OffCut : on_cube_edge[mesh.edge_of[h]] && cube_edges_are_isolines ? AlongCubeEdge : OnCut;
+    const Kind kind = !on_cut[v]                                                 ? OffCut
+                      : on_cube_edge[mesh.edge_of[h]] && cube_edges_are_isolines ? AlongCubeEdge
+                                                                                 : OnCut;
     if (folded[kind] >= 2 || (kind == OnCut && cube_edges_are_isolines)) continue;
     bool near = false;
     for (int g : outgoing_halfedges(mesh, v))
@@ -716,8 +721,8 @@ TEST(QuadExtraction, CubeWithOneSideRemoved) {
 TEST(QuadExtraction, SingularitiesOfAnyValenceFromGluedSectors) {
   for (int k : {3, 5, 6, 8}) {
     auto sectors = make_glued_sectors(k, 3, k);
-    auto r = extract_and_check("sectors k=" + std::to_string(k), sectors.mesh, to_igm(sectors.mesh, sectors.param),
-                               9 * k);
+    auto r =
+        extract_and_check("sectors k=" + std::to_string(k), sectors.mesh, to_igm(sectors.mesh, sectors.param), 9 * k);
     EXPECT_EQ(r.stats.singular_vertices, 1 + k);  // the centre and the outer corners
     auto s2 = scaled(make_glued_sectors(k, 2, 50 + k), 2);
     perturb_vertices(s2, 0.45, k);
@@ -750,9 +755,11 @@ SyntheticParametrized tutte_rectangle(const TriMesh& disc, int w, int h) {
   }
   const int nb = static_cast<int>(loop.size());
   std::vector<double> arc(nb + 1, 0);
-  for (int i = 0; i < nb; ++i) arc[i + 1] = arc[i] + (disc.position(loop[(i + 1) % nb]) - disc.position(loop[i])).norm();
+  for (int i = 0; i < nb; ++i)
+    arc[i + 1] = arc[i] + (disc.position(loop[(i + 1) % nb]) - disc.position(loop[i])).norm();
   int corner[5];
-  for (int c = 0; c < 4; ++c) corner[c] = static_cast<int>(std::lower_bound(arc.begin(), arc.end(), arc[nb] * c / 4) - arc.begin());
+  for (int c = 0; c < 4; ++c)
+    corner[c] = static_cast<int>(std::lower_bound(arc.begin(), arc.end(), arc[nb] * c / 4) - arc.begin());
   corner[4] = nb;
   for (int c = 0; c < 4; ++c)
     if (corner[c + 1] <= corner[c]) throw std::runtime_error("tutte_rectangle: a side without boundary edges");
@@ -777,8 +784,10 @@ SyntheticParametrized tutte_rectangle(const TriMesh& disc, int w, int h) {
     triplets.emplace_back(unknown[v], unknown[v], double(out.size()));
     for (int hh : out) {
       const int u = disc.to(hh);
-      if (fixed[u]) rhs.row(unknown[v]) += uv[u].transpose();
-      else triplets.emplace_back(unknown[v], unknown[u], -1.0);
+      if (fixed[u])
+        rhs.row(unknown[v]) += uv[u].transpose();
+      else
+        triplets.emplace_back(unknown[v], unknown[u], -1.0);
     }
   }
   Eigen::SparseMatrix<double> L(n, n);
@@ -797,8 +806,8 @@ SyntheticParametrized tutte_rectangle(const TriMesh& disc, int w, int h) {
 }
 
 TEST(QuadExtraction, TutteRectanglesOnRealMeshes) {
-  for (const std::string name : {"spot.obj", "bunny.off", "fandisk.obj", "wingnut.obj", "decimated-max.obj",
-                                 "camelhead.off", "face.obj"}) {
+  for (const std::string name :
+       {"spot.obj", "bunny.off", "fandisk.obj", "wingnut.obj", "decimated-max.obj", "camelhead.off", "face.obj"}) {
     const TriMesh mesh = test::component_mesh(test::load_mesh(name), 0);
     for (const auto& size : {std::array<int, 2>{25, 20}, std::array<int, 2>{50, 40}}) {
       // A closed mesh is opened at a vertex star; a star whose Tutte map has an ear triangle (three
@@ -820,8 +829,9 @@ TEST(QuadExtraction, TutteRectanglesOnRealMeshes) {
         Timer timer;
         const auto r = extract_and_check(name + " " + std::to_string(size[0]) + "x" + std::to_string(size[1]),
                                          tutte.mesh, igm, size[0] * size[1], false);
-        std::printf("%-18s %6d triangles %5d quads: %7lld triangle steps, extract+check %.3f s\n", name.c_str(), disc.num_faces(),
-                    r.quads.num_quads(), static_cast<long long>(r.stats.triangle_steps), timer.seconds());
+        std::printf("%-18s %6d triangles %5d quads: %7lld triangle steps, extract+check %.3f s\n", name.c_str(),
+                    disc.num_faces(), r.quads.num_quads(), static_cast<long long>(r.stats.triangle_steps),
+                    timer.seconds());
       }
       EXPECT_TRUE(done) << name << ": no flip-free Tutte map";
     }
@@ -849,7 +859,8 @@ QuadMeshMap quad_mesh_map(const TriMesh& tri, int k, unsigned seed) {
     const int h = tri.edge_halfedge[e];
     mesh.V.row(nv + e) = 0.5 * (tri.V.row(tri.from(h)) + tri.V.row(tri.to(h)));
   }
-  for (int f = 0; f < nf; ++f) mesh.V.row(centre(f)) = (tri.V.row(tri.F(f, 0)) + tri.V.row(tri.F(f, 1)) + tri.V.row(tri.F(f, 2))) / 3;
+  for (int f = 0; f < nf; ++f)
+    mesh.V.row(centre(f)) = (tri.V.row(tri.F(f, 0)) + tri.V.row(tri.F(f, 1)) + tri.V.row(tri.F(f, 2))) / 3;
   mesh.F.resize(6 * nf, 3);
   out.map.param.uv.resize(18 * nf, 2);
   const Vec2 square[4] = {{0, 0}, {double(k), 0}, {double(k), double(k)}, {0, double(k)}};
@@ -858,7 +869,7 @@ QuadMeshMap quad_mesh_map(const TriMesh& tri, int k, unsigned seed) {
     for (int c = 0; c < 3; ++c) {
       const int h = 3 * f + c, hp = TriMesh::prev(h);
       const int quad[4] = {tri.from(h), mid(h), centre(f), mid(hp)};  // counter-clockwise
-      const int d = rng() % 2;  // diagonal 0-2 or 1-3
+      const int d = rng() % 2;                                        // diagonal 0-2 or 1-3
       const int split[2][2][3] = {{{0, 1, 2}, {0, 2, 3}}, {{0, 1, 3}, {1, 2, 3}}};
       for (const auto& tr : split[d]) {
         for (int j = 0; j < 3; ++j) {
@@ -875,11 +886,15 @@ QuadMeshMap quad_mesh_map(const TriMesh& tri, int k, unsigned seed) {
 }
 
 TEST(QuadExtraction, QuadMeshMapsOfRealMeshesWithSingularitiesOfEveryValence) {
-  struct Case { std::string name; int max_k; bool smooth; };
+  struct Case {
+    std::string name;
+    int max_k;
+    bool smooth;
+  };
   // k = 1: the map of the quad mesh itself; k = 2: refined and perturbed. On CAD meshes the
   // perturbation moves isolines off the sharp edges, so quads may fold over them: flips are
   // asserted on the smooth meshes only there.
-  const Case cases[] = {{"joint.obj", 2, false},   {"spot.obj", 2, true},      {"torus.obj", 2, true},
+  const Case cases[] = {{"joint.obj", 2, false},    {"spot.obj", 2, true},     {"torus.obj", 2, true},
                         {"fertility.off", 2, true}, {"wingnut.obj", 2, false}, {"camelhead.off", 1, true}};
   for (const Case& c : cases) {
     const std::string& name = c.name;
@@ -889,13 +904,13 @@ TEST(QuadExtraction, QuadMeshMapsOfRealMeshesWithSingularitiesOfEveryValence) {
       if (k == 2) perturb_vertices(qm.map, 0.45, 17);
       const ExactParametrization igm = to_igm(qm.map.mesh, qm.map.param, 24);
       Timer timer;
-      const auto r = extract_and_check(name + " k=" + std::to_string(k), qm.map.mesh, igm, qm.quads,
-                                       k == 1 || c.smooth);
+      const auto r =
+          extract_and_check(name + " k=" + std::to_string(k), qm.map.mesh, igm, qm.quads, k == 1 || c.smooth);
       int max_valence = 0;
       const QuadTopology topo = quad_topology(r.quads);
       for (int v = 0; v < r.quads.num_vertices(); ++v) max_valence = std::max(max_valence, topo.valence[v]);
-      std::printf("%-14s k=%d %6d triangles %6d quads %5d singular (max valence %d), extract+check %.3f s\n", name.c_str(), k,
-                  qm.map.mesh.num_faces(), r.quads.num_quads(), r.stats.singular_vertices, max_valence,
+      std::printf("%-14s k=%d %6d triangles %6d quads %5d singular (max valence %d), extract+check %.3f s\n",
+                  name.c_str(), k, qm.map.mesh.num_faces(), r.quads.num_quads(), r.stats.singular_vertices, max_valence,
                   timer.seconds());
     }
   }
@@ -1055,9 +1070,9 @@ TEST(QuadExtraction, ClosestPointMatchesBruteForce) {
     const Vec3 p(u(rng), u(rng), u(rng) / 2);
     double best = 1e300;
     for (int f = 0; f < torus.mesh.num_faces(); ++f) {
-      const Vec3 q = closest_point_on_triangle(p, torus.mesh.position(torus.mesh.F(f, 0)),
-                                               torus.mesh.position(torus.mesh.F(f, 1)),
-                                               torus.mesh.position(torus.mesh.F(f, 2)));
+      const Vec3 q =
+          closest_point_on_triangle(p, torus.mesh.position(torus.mesh.F(f, 0)), torus.mesh.position(torus.mesh.F(f, 1)),
+                                    torus.mesh.position(torus.mesh.F(f, 2)));
       best = std::min(best, (q - p).squaredNorm());
     }
     EXPECT_NEAR(bvh.closest_point(p).squared_distance, best, 1e-12);
@@ -1079,8 +1094,8 @@ TEST(QuadExtraction, MetricsAndReport) {
   EXPECT_EQ(j["faces"].get<int>(), 384);
   EXPECT_EQ(j["vertices"].get<int>(), 384);
   EXPECT_EQ(j["irregular_vertices"].get<int>(), 0);
-  for (const char* key : {"min_scaled_jacobian", "mean_angle_deviation_deg", "p95_angle_deviation_deg",
-                          "flipped_quads", "hausdorff"})
+  for (const char* key :
+       {"min_scaled_jacobian", "mean_angle_deviation_deg", "p95_angle_deviation_deg", "flipped_quads", "hausdorff"})
     EXPECT_TRUE(j.contains(key)) << key;
   const Json s = r.stats;
   EXPECT_EQ(s["expected_quads"].get<int64_t>(), 384);
@@ -1109,7 +1124,11 @@ TEST(QuadExtraction, AppendMergesComponents) {
 
 // Prints figures for ~100k quads (no timing assertion).
 TEST(QuadExtraction, BenchmarkHundredThousandQuads) {
-  struct Case { std::string name; SyntheticParametrized s; int64_t quads; };
+  struct Case {
+    std::string name;
+    SyntheticParametrized s;
+    int64_t quads;
+  };
   std::vector<Case> cases;
   cases.push_back({"cube n=130 (1 quad per 2 triangles)", test::make_grid_cube(130), 6 * 130 * 130});
   cases.push_back({"cube n=20 k=7 (24 quads per triangle)", scaled(test::make_grid_cube(20), 7), 6 * 400 * 49});
@@ -1125,9 +1144,8 @@ TEST(QuadExtraction, BenchmarkHundredThousandQuads) {
     EXPECT_EQ(r.quads.num_quads(), c.quads);
     Timer metrics_timer;
     const QuadMetrics m = compute_quad_metrics(r.quads, c.s.mesh, QuadMetricsOptions{}, progress);
-    std::printf("%-40s %7d triangles %7d quads  extraction %.3f s  metrics %.3f s  hausdorff %.2e\n",
-                c.name.c_str(), c.s.mesh.num_faces(), r.quads.num_quads(), seconds, metrics_timer.seconds(),
-                m.hausdorff);
+    std::printf("%-40s %7d triangles %7d quads  extraction %.3f s  metrics %.3f s  hausdorff %.2e\n", c.name.c_str(),
+                c.s.mesh.num_faces(), r.quads.num_quads(), seconds, metrics_timer.seconds(), m.hausdorff);
   }
 }
 

@@ -11,8 +11,8 @@
 #pragma once
 #include <array>
 #include <cmath>
-#include <stdexcept>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "test_support.h"
@@ -38,7 +38,8 @@ inline QuadMap make_quad_map(const TriMesh& tri, const std::vector<char>& tri_fe
     const int h = tri.edge_halfedge[e];
     m.V.row(nv + e) = 0.5 * (tri.V.row(tri.from(h)) + tri.V.row(tri.to(h)));
   }
-  for (int f = 0; f < nf; ++f) m.V.row(nv + ne + f) = (tri.V.row(tri.F(f, 0)) + tri.V.row(tri.F(f, 1)) + tri.V.row(tri.F(f, 2))) / 3;
+  for (int f = 0; f < nf; ++f)
+    m.V.row(nv + ne + f) = (tri.V.row(tri.F(f, 0)) + tri.V.row(tri.F(f, 1)) + tri.V.row(tri.F(f, 2))) / 3;
   m.F.resize(6 * nf, 3);
   out.param.uv.resize(18 * nf, 2);
   const double c = triple[0], s = triple[1];  // times the square's side triple[2]
@@ -81,7 +82,8 @@ inline ExactParametrization exact_integer_map(const TriMesh& mesh, const Paramet
   ex.uv.resize(nc);
   for (int k = 0; k < nc; ++k)
     for (int a = 0; a < 2; ++a) {
-      if (param.uv(k, a) != std::round(param.uv(k, a))) throw std::runtime_error("exact_integer_map: non-integer coordinate");
+      if (param.uv(k, a) != std::round(param.uv(k, a)))
+        throw std::runtime_error("exact_integer_map: non-integer coordinate");
       ex.uv[k][a] = static_cast<int64_t>(std::llround(param.uv(k, a))) * (int64_t(1) << fraction_bits);
     }
   ex.rotation = param.rotation;
@@ -104,7 +106,8 @@ inline std::vector<char> sharp_edges(const TriMesh& mesh, double degrees) {
   for (int e = 0; e < mesh.num_edges(); ++e) {
     const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
     if (o < 0) continue;
-    const Vec3 a = mesh.face_normal_unnormalized(h / 3).normalized(), b = mesh.face_normal_unnormalized(o / 3).normalized();
+    const Vec3 a = mesh.face_normal_unnormalized(h / 3).normalized(),
+               b = mesh.face_normal_unnormalized(o / 3).normalized();
     sharp[e] = a.dot(b) < limit;
   }
   return sharp;

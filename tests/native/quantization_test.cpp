@@ -15,8 +15,8 @@
 #include "quantization/generating_vectors.h"
 #include "quantization/quantization.h"
 #include "quantization/round_quantization.h"
-#include "synthetic_tmesh.h"
 #include "quantization/validity.h"
+#include "synthetic_tmesh.h"
 #include "test_support.h"
 
 namespace qgp {
@@ -151,7 +151,8 @@ std::vector<Family> families() {
       {"planar", 1,
        [](int splits, unsigned seed) {
          std::mt19937 rng(seed);
-         PatchLayout layout = make_grid_layout(random_sizes(3, 20, 60, rng), random_sizes(2, 20, 60, rng), false, false);
+         PatchLayout layout =
+             make_grid_layout(random_sizes(3, 20, 60, rng), random_sizes(2, 20, 60, rng), false, false);
          // An interior feature curve (patch side) ending at two virtual singularities.
          layout.feature_side.assign(4 * layout.patches.size(), 0);
          layout.feature_side[4 * 1 + 2] = 1;
@@ -169,9 +170,8 @@ std::vector<Family> families() {
       {"box", 2,
        [](int splits, unsigned seed) {
          std::mt19937 rng(seed);
-         PatchLayout layout =
-             make_polycube_layout({{0, 0, 0}}, random_sizes(1, 20, 80, rng), random_sizes(1, 20, 80, rng),
-                                  random_sizes(1, 20, 80, rng), true);
+         PatchLayout layout = make_polycube_layout({{0, 0, 0}}, random_sizes(1, 20, 80, rng),
+                                                   random_sizes(1, 20, 80, rng), random_sizes(1, 20, 80, rng), true);
          layout.unit = 0.1;
          return build_patch_tmesh(layout, splits, seed);
        }},
@@ -440,8 +440,10 @@ TEST(QuantizationValidity, IncrementalTestAgreesWithTheFullTest) {
         const bool got = incremental.check_changed(y, changed, nullptr, true).valid;
         ASSERT_EQ(got, expected) << family.name << " seed " << seed << " step " << step;
         ++checks;
-        if (got) x = y;
-        else ++invalid;
+        if (got)
+          x = y;
+        else
+          ++invalid;
       }
     }
   }
@@ -600,7 +602,8 @@ std::vector<char> cube_crease_edges(const TriMesh& mesh) {
   for (int e = 0; e < mesh.num_edges(); ++e) {
     const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
     if (o >= 0)
-      crease[e] = mesh.face_normal_unnormalized(h / 3).normalized().dot(mesh.face_normal_unnormalized(o / 3).normalized()) < 0.5;
+      crease[e] = mesh.face_normal_unnormalized(h / 3).normalized().dot(
+                      mesh.face_normal_unnormalized(o / 3).normalized()) < 0.5;
   }
   return crease;
 }

@@ -29,7 +29,9 @@ class SoupImporter final : public OM::IO::BaseImporter {
     soup_.add_face(f.data(), static_cast<int>(f.size()));
     return OM::FaceHandle(soup_.num_faces() - 1);
   }
-  void set_point(OM::VertexHandle vh, const OM::Vec3f& p) override { soup_.positions[vh.idx()] = Vec3(p[0], p[1], p[2]); }
+  void set_point(OM::VertexHandle vh, const OM::Vec3f& p) override {
+    soup_.positions[vh.idx()] = Vec3(p[0], p[1], p[2]);
+  }
   size_t n_vertices() const override { return soup_.positions.size(); }
   size_t n_faces() const override { return static_cast<size_t>(soup_.num_faces()); }
   size_t n_edges() const override { return 0; }
@@ -96,12 +98,12 @@ TEST_P(ReaderOracle, SameSoupAsOpenMesh) {
   EXPECT_LT(worst, 1e-6) << name;  // OpenMesh reads some formats in single precision
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedMeshes, ReaderOracle, ::testing::ValuesIn(test::all_mesh_files()),
-                         [](const auto& info) {
-                           std::string n = info.param;
-                           for (char& ch : n) if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(SharedMeshes, ReaderOracle, ::testing::ValuesIn(test::all_mesh_files()), [](const auto& info) {
+  std::string n = info.param;
+  for (char& ch : n)
+    if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return n;
+});
 
 }  // namespace
 }  // namespace qgp

@@ -175,7 +175,8 @@ void expect_valid_map(const TriMesh& mesh, const SeamlessMap& map, const std::st
   EXPECT_EQ(s.unresolved_equations, 0);
   EXPECT_EQ(exact_transition_residual(mesh, s.param), 0);
   int bad = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) bad += orient2d_exact(s.param.corner(f, 0), s.param.corner(f, 1), s.param.corner(f, 2)) <= 0;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    bad += orient2d_exact(s.param.corner(f, 0), s.param.corner(f, 1), s.param.corner(f, 2)) <= 0;
   EXPECT_EQ(bad, 0);
 }
 
@@ -183,10 +184,10 @@ void print_stats(const std::string& name, const SeamlessMap& m, double seconds) 
   const auto& s = m.stats;
   std::cout << "[seamless] " << name << ": flipped " << s.flipped_before_ipopt << " -> " << s.flipped_triangles
             << ", degenerate " << s.degenerate_before_ipopt << " -> " << s.degenerate_triangles << ", ipopt solves "
-            << s.ipopt_solves << " iterations " << s.ipopt_iterations << ", field-frame solves " << s.field_frame_solves << ", winding defects " << s.winding_defects
-            << ", region faces " << s.max_region_faces
-            << ", energy " << s.energy << ", min area ratio " << s.min_area_ratio << ", residual "
-            << s.max_transition_residual << ", " << seconds << " s\n";
+            << s.ipopt_solves << " iterations " << s.ipopt_iterations << ", field-frame solves " << s.field_frame_solves
+            << ", winding defects " << s.winding_defects << ", region faces " << s.max_region_faces << ", energy "
+            << s.energy << ", min area ratio " << s.min_area_ratio << ", residual " << s.max_transition_residual << ", "
+            << seconds << " s\n";
 }
 
 SeamlessMap run(const TriMesh& mesh, const FieldInput& in, double edge_length, const std::string& name) {
@@ -403,7 +404,8 @@ TEST(ParametrizationProblem, IntegerTranslationsHardPenaltyAndRelinearized) {
     if (loop_done[loop]) continue;
     loop_done[loop] = 1;
     for (int a = 0; a < 2; ++a, ++constraints)
-      problem.add_linear_constraint(translation_terms(torus.mesh, free_map.param, h, a), std::round(t[a]) + (a == loop ? 1 : 0));
+      problem.add_linear_constraint(translation_terms(torus.mesh, free_map.param, h, a),
+                                    std::round(t[a]) + (a == loop ? 1 : 0));
   }
   ASSERT_EQ(constraints, 4);
   ParametrizationSolveOptions hard;
@@ -526,10 +528,10 @@ Prepared prepare(const std::string& name, double sharp_angle, double target_face
 //   before the elimination change; 0 on the dev machine since. A small allowance stays because
 //   the count has differed between machines.
 struct KnownIrregular {
-  int max_repair_rounds;    // repair budget (0: the default)
-  double max_fraction_left;  // bad after / bad before
-  double max_fraction_faces; // bad after / faces
-  int max_bad;               // absolute allowance (whichever bound is larger applies)
+  int max_repair_rounds;      // repair budget (0: the default)
+  double max_fraction_left;   // bad after / bad before
+  double max_fraction_faces;  // bad after / faces
+  int max_bad;                // absolute allowance (whichever bound is larger applies)
 };
 const std::map<std::string, KnownIrregular> kKnownIrregular = {
     {"armadillo.obj", {0, 0.0, 0.0, 2}},
@@ -537,7 +539,8 @@ const std::map<std::string, KnownIrregular> kKnownIrregular = {
 };
 
 TEST(SeamlessMapMeshes, EveryManifoldMeshIsSeamlessAndRegular) {
-  std::cout << "[seamless] mesh | faces | singularities | flipped before -> after | degenerate | ipopt rounds/iterations | field s | seamless s\n";
+  std::cout << "[seamless] mesh | faces | singularities | flipped before -> after | degenerate | ipopt "
+               "rounds/iterations | field s | seamless s\n";
   for (const std::string& name : test::manifold_mesh_files()) {
     SCOPED_TRACE(name);
     const Prepared p = prepare(name, -1, 2000);

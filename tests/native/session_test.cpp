@@ -5,10 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <cstdlib>
 #include <cmath>
-#include <limits>
+#include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -17,8 +17,8 @@
 #include "intake/polygon_soup.h"
 #include "intake/read_mesh_file.h"
 #include "intake/working_mesh.h"
-#include "pipeline/session.h"
 #include "metrics/polygon_metrics.h"
+#include "pipeline/session.h"
 #include "quad_extraction/surface_projection.h"
 #include "test_support.h"
 
@@ -40,7 +40,8 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
     EXPECT_LT(f, session.input().num_faces()) << name;
   }
   Progress progress;
-  const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, sharp_angle, progress);
+  const PolygonMeshMetrics m =
+      measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, sharp_angle, progress);
   EXPECT_EQ(m.non_quads, 0) << name;
   EXPECT_EQ(m.non_manifold_edges, 0) << name;
   EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << name;
@@ -117,7 +118,8 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   const Json& report = session.report();
   for (const char* key : {"input", "field", "seamless", "tmesh", "quantization", "igm", "extraction", "quad"})
     EXPECT_TRUE(report.contains(key)) << key;
-  for (const char* stage : {"cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction"}) {
+  for (const char* stage :
+       {"cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction"}) {
     EXPECT_TRUE(report["timings_s"].contains(stage)) << stage;
     EXPECT_GT(counter.updates[stage], 0) << stage;
   }
@@ -130,8 +132,8 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
 }
 
 // Same input, same options: the same quads and UVs, bit for bit, in a fresh session. Camelhead at
-// 2000 quads (a sweep-sized run: Release pass only) gave different quads from run to run while MUMPS ordered its KKT systems with the
-// threaded SCOTCH (the seamless map's Ipopt solves); nefertiti and dragon-genus1 did too.
+// 2000 quads (a sweep-sized run: Release pass only) gave different quads from run to run while MUMPS ordered its KKT
+// systems with the threaded SCOTCH (the seamless map's Ipopt solves); nefertiti and dragon-genus1 did too.
 TEST(SessionMeshes, SameInputGivesTheSameOutputEveryRun) {
   const PolygonSoup input = read_mesh_file(test::mesh_path("camelhead.off"));
   auto run_once = [&](QuadMesh& quads, std::vector<double>& uv) {
@@ -293,7 +295,8 @@ TEST(SessionPipeline, GridUvsCoverTrianglesIntakeRemoved) {
   std::vector<std::vector<Vec2>> copies(in.num_vertices());  // uvs of each vertex in kept triangles
   for (int f = 0; f < in.num_faces(); ++f)
     if (kept[f])
-      for (int k = 0; k < 3; ++k) copies[in.face_vertices[3 * f + k]].push_back(Vec2(uv[6 * f + 2 * k], uv[6 * f + 2 * k + 1]));
+      for (int k = 0; k < 3; ++k)
+        copies[in.face_vertices[3 * f + k]].push_back(Vec2(uv[6 * f + 2 * k], uv[6 * f + 2 * k + 1]));
   int removed = 0, matched = 0;
   for (int f = 0; f < in.num_faces(); ++f) {
     for (int i = 0; i < 6; ++i) ASSERT_TRUE(std::isfinite(uv[6 * f + i])) << "face " << f;
@@ -338,8 +341,10 @@ TEST(SessionPipeline, JointKeepsItsSharpEdgesAndFaceItsBoundary) {
     std::string message;
     ASSERT_EQ(run_job(session, Job::Remesh, progress, &message), kCompleted) << name << ": " << message;
     const PolygonMeshMetrics m = expect_valid_output(name, session, sharp);
-    if (sharp > 0) EXPECT_GT(m.sharp_edges, 100) << name;
-    else EXPECT_GT(m.quad.topology.boundary_edges, 0) << name;
+    if (sharp > 0)
+      EXPECT_GT(m.sharp_edges, 100) << name;
+    else
+      EXPECT_GT(m.quad.topology.boundary_edges, 0) << name;
   }
 }
 
@@ -383,10 +388,9 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
   // fails with the reason. Without inner singularities (a flat square) rounding is valid. (A grid
   // torus does not do: its smoothest cross field has singularities.)
   int completed = 0, refused = 0;
-  const std::pair<std::string, PolygonSoup> inputs[] = {
-      {"flat square", flat_square(20)},
-      {"spot.obj", read_mesh_file(test::mesh_path("spot.obj"))},
-      {"joint.obj", read_mesh_file(test::mesh_path("joint.obj"))}};
+  const std::pair<std::string, PolygonSoup> inputs[] = {{"flat square", flat_square(20)},
+                                                        {"spot.obj", read_mesh_file(test::mesh_path("spot.obj"))},
+                                                        {"joint.obj", read_mesh_file(test::mesh_path("joint.obj"))}};
   for (const auto& [name, soup] : inputs) {
     Session session(soup);
     RemeshOptions options;
@@ -418,10 +422,14 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
 // from the integer-grid map, and these from the layout, so that a broken map extraction, or a map
 // that starts working here, fails the test until this list is updated.
 bool quads_expected_from_layout(const std::string& name, double sharp, double target) {
-  static const std::set<std::string> runs = {
-      "armadillo.obj@500",         "camelhead.off@2000",  "decimated-max.obj@2000",
-      "fertility.off@2000",        "stanford-bunny.obj@2000", "mnf07HeadFem_rem_rem_p.obj@500",
-      "mnf07HeadFem_rem_rem_p.obj@2000", "wingnut.obj@2000@40"};
+  static const std::set<std::string> runs = {"armadillo.obj@500",
+                                             "camelhead.off@2000",
+                                             "decimated-max.obj@2000",
+                                             "fertility.off@2000",
+                                             "stanford-bunny.obj@2000",
+                                             "mnf07HeadFem_rem_rem_p.obj@500",
+                                             "mnf07HeadFem_rem_rem_p.obj@2000",
+                                             "wingnut.obj@2000@40"};
   std::string run = name + "@" + std::to_string(static_cast<int>(target));
   if (sharp > 0) run += "@" + std::to_string(static_cast<int>(sharp));
   return runs.count(run) > 0;
@@ -432,7 +440,8 @@ bool quads_expected_from_layout(const std::string& name, double sharp, double ta
 // StageFailed error that leaves no result behind.
 std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>& meshes, std::vector<double> targets) {
   std::cout << "mesh | sharp | target | quads | irregular | min scaled Jacobian | mean angle dev | Hausdorff | "
-               "field..tmesh s | quantization s | igm s | extraction s | quads from" << std::endl;
+               "field..tmesh s | quantization s | igm s | extraction s | quads from"
+            << std::endl;
   std::vector<std::string> failed;
   for (const auto& [name, sharp] : meshes) {
     Session session(read_mesh_file(test::mesh_path(name)));
@@ -457,8 +466,9 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
       auto sec = [&](const char* k) { return t.value(k, 0.0); };
       std::cout << name << " | " << sharp << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices
                 << " | " << m.quad.min_scaled_jacobian << " | " << m.quad.mean_angle_deviation << " | "
-                << m.quad.hausdorff << " | " << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh")
-                << " | " << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << " | "
+                << m.quad.hausdorff << " | "
+                << sec("cross_field") + sec("cut_graph") + sec("seamless_map") + sec("tmesh") << " | "
+                << sec("quantization") << " | " << sec("igm") << " | " << sec("quad_extraction") << " | "
                 << session.report()["extraction"]["components"][0].value("path", "") << std::endl;
     }
   }
@@ -474,9 +484,9 @@ std::string joined(const std::vector<std::string>& lines) {
 // Meshes that must become valid quad meshes at three densities (the CI set; every one of its runs
 // must succeed).
 TEST(SessionMeshes, OrganicMeshesBecomeValidQuadMeshesAtThreeDensities) {
-  const std::vector<std::pair<std::string, double>> meshes = {
-      {"spot.obj", -1}, {"bunny.off", -1}, {"torus.obj", -1}, {"kitten.obj", -1},
-      {"rocker-arm.obj", -1}, {"joint_rem_p.obj", -1}};
+  const std::vector<std::pair<std::string, double>> meshes = {{"spot.obj", -1},       {"bunny.off", -1},
+                                                              {"torus.obj", -1},      {"kitten.obj", -1},
+                                                              {"rocker-arm.obj", -1}, {"joint_rem_p.obj", -1}};
   const std::vector<std::string> failed = sweep(meshes, {500, 2000, 8000});
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
@@ -485,7 +495,7 @@ TEST(SessionMeshes, OrganicMeshesBecomeValidQuadMeshesAtThreeDensities) {
 // map's quads or, where that map keeps a flip, the T-mesh layout's; the output invariants hold.
 TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
   const std::vector<std::pair<std::string, double>> meshes = {
-      {"block.obj", -1},   {"fandisk.obj", -1}, {"fertility.off", -1},  {"beetle.off", -1},
+      {"block.obj", -1},   {"fandisk.obj", -1}, {"fertility.off", -1},     {"beetle.off", -1},
       {"wingnut.obj", -1}, {"face.obj", -1},    {"decimated-max.obj", -1}, {"mnf07HeadFem_rem_rem_p.obj", -1},
       {"wingnut.obj", 40}, {"fandisk.obj", 40}, {"stanford-bunny.obj", -1}};
   const std::vector<std::string> failed = sweep(meshes, {2000});

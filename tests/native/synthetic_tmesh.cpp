@@ -76,8 +76,8 @@ std::vector<std::pair<int, int64_t>> sides_of(const PatchLayout::Patch& p, int64
 
 }  // namespace
 
-PatchLayout make_grid_layout(const std::vector<int64_t>& widths, const std::vector<int64_t>& heights,
-                             bool periodic_u, bool periodic_v) {
+PatchLayout make_grid_layout(const std::vector<int64_t>& widths, const std::vector<int64_t>& heights, bool periodic_u,
+                             bool periodic_v) {
   const int nu = static_cast<int>(widths.size()), nv = static_cast<int>(heights.size());
   if (nu < 1 || nv < 1) bad_layout("empty grid");
   if ((periodic_u && nu < 3) || (periodic_v && nv < 3)) bad_layout("periodic grids need at least 3 patches per period");
@@ -122,15 +122,18 @@ PatchLayout make_polycube_layout(const std::vector<std::array<int, 3>>& voxels, 
         if (!cell(i, j, k - 1))
           add({vid(i, j, k), vid(i, j + 1, k), vid(i + 1, j + 1, k), vid(i + 1, j, k)}, dy[j], dx[i], 4);
         if (!cell(i, j, k + 1))
-          add({vid(i, j, k + 1), vid(i + 1, j, k + 1), vid(i + 1, j + 1, k + 1), vid(i, j + 1, k + 1)}, dx[i], dy[j], 5);
+          add({vid(i, j, k + 1), vid(i + 1, j, k + 1), vid(i + 1, j + 1, k + 1), vid(i, j + 1, k + 1)}, dx[i], dy[j],
+              5);
         if (!cell(i, j - 1, k))
           add({vid(i, j, k), vid(i + 1, j, k), vid(i + 1, j, k + 1), vid(i, j, k + 1)}, dx[i], dz[k], 2);
         if (!cell(i, j + 1, k))
-          add({vid(i, j + 1, k), vid(i, j + 1, k + 1), vid(i + 1, j + 1, k + 1), vid(i + 1, j + 1, k)}, dz[k], dx[i], 3);
+          add({vid(i, j + 1, k), vid(i, j + 1, k + 1), vid(i + 1, j + 1, k + 1), vid(i + 1, j + 1, k)}, dz[k], dx[i],
+              3);
         if (!cell(i - 1, j, k))
           add({vid(i, j, k), vid(i, j, k + 1), vid(i, j + 1, k + 1), vid(i, j + 1, k)}, dz[k], dy[j], 0);
         if (!cell(i + 1, j, k))
-          add({vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i + 1, j + 1, k + 1), vid(i + 1, j, k + 1)}, dy[j], dz[k], 1);
+          add({vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i + 1, j + 1, k + 1), vid(i + 1, j, k + 1)}, dy[j], dz[k],
+              1);
       }
   if (sharp_edges_are_features) {
     const Gluing g = glue(layout);
@@ -190,7 +193,9 @@ std::vector<std::array<int, 3>> random_manifold_polycube(int count, int n, unsig
   std::vector<std::array<int, 3>> voxels{{n / 2, n / 2, n / 2}};
   std::vector<int64_t> unit(n, 1);
   std::vector<char> filled(static_cast<size_t>(n) * n * n, 0);
-  auto at = [&](const std::array<int, 3>& v) -> char& { return filled[(static_cast<size_t>(v[2]) * n + v[1]) * n + v[0]]; };
+  auto at = [&](const std::array<int, 3>& v) -> char& {
+    return filled[(static_cast<size_t>(v[2]) * n + v[1]) * n + v[0]];
+  };
   at(voxels[0]) = 1;
   const int dirs[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   for (int attempts = 0; static_cast<int>(voxels.size()) < count && attempts < 200 * count; ++attempts) {
@@ -230,8 +235,10 @@ TMesh build_patch_tmesh(const PatchLayout& layout, int splits, unsigned seed) {
     const int64_t lo = axis == 0 ? r.u0 : r.v0, hi = axis == 0 ? r.u1 : r.v1;
     const int64_t at = std::uniform_int_distribution<int64_t>(lo + 1, hi - 1)(rng);
     PatchRect a = r, b = r;
-    if (axis == 0) a.u1 = b.u0 = at;
-    else a.v1 = b.v0 = at;
+    if (axis == 0)
+      a.u1 = b.u0 = at;
+    else
+      a.v1 = b.v0 = at;
     r = a;
     rects.push_back(b);
     ++k;
@@ -331,18 +338,20 @@ TMesh build_patch_tmesh(const PatchLayout& layout, const std::vector<PatchRect>&
       if (!on_side) continue;
       key = {1, p, ps, std::min(ta, tb), std::max(ta, tb), 0};
       const auto partner = g.partner[4 * p + ps];
-      if (partner[0] < 0) *boundary = true;
+      if (partner[0] < 0)
+        *boundary = true;
       else {
         const int64_t L = side_length(patch, ps);
-        key = std::min(key, std::array<int64_t, 6>{1, partner[0], partner[1], L - std::max(ta, tb), L - std::min(ta, tb), 0});
+        key = std::min(
+            key, std::array<int64_t, 6>{1, partner[0], partner[1], L - std::max(ta, tb), L - std::min(ta, tb), 0});
       }
       if (!layout.feature_side.empty() && layout.feature_side[4 * p + ps]) *feature = true;
     }
     return key;
   };
   std::map<std::array<int64_t, 6>, int> edge_of;
-  std::vector<int> edge_patch;        // patch whose frame the edge's direction refers to
-  std::vector<int> edge_first_slot;   // slot (0 left / 1 right) of the first cell
+  std::vector<int> edge_patch;       // patch whose frame the edge's direction refers to
+  std::vector<int> edge_first_slot;  // slot (0 left / 1 right) of the first cell
   tm.cells.resize(rects.size());
   for (size_t c = 0; c < rects.size(); ++c) {
     const auto& [p, r] = rects[c];
@@ -471,7 +480,8 @@ TMesh build_patch_tmesh(const PatchLayout& layout, const std::vector<PatchRect>&
   for (int n = 0; n < N; ++n) {
     TMeshNode& node = tm.nodes[n];
     auto& list = inc[n];
-    if (!is_corner[n]) std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.direction < b.direction; });
+    if (!is_corner[n])
+      std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.direction < b.direction; });
     node.incidences = list;
     int feature_edges = 0, boundary_edges = 0;
     std::vector<int> feature_dirs;
@@ -488,7 +498,8 @@ TMesh build_patch_tmesh(const PatchLayout& layout, const std::vector<PatchRect>&
       node.kind = boundary_edges > 0 ? TMeshNode::Kind::BoundaryNode
                   : node.on_feature  ? TMeshNode::Kind::FeatureCorner
                                      : TMeshNode::Kind::Singularity;
-    else node.kind = list.size() >= 4 ? TMeshNode::Kind::Crossing : TMeshNode::Kind::TJunction;
+    else
+      node.kind = list.size() >= 4 ? TMeshNode::Kind::Crossing : TMeshNode::Kind::TJunction;
   }
   return tm;
 }

@@ -18,7 +18,7 @@ namespace qgp {
 
 struct PatchLayout {
   struct Patch {
-    std::array<int, 4> corner{};  // ids of the corners at (0,0), (W,0), (W,H), (0,H)
+    std::array<int, 4> corner{};    // ids of the corners at (0,0), (W,0), (W,H), (0,H)
     int64_t width = 1, height = 1;  // in ticks
   };
   std::vector<Patch> patches;
@@ -28,8 +28,8 @@ struct PatchLayout {
 
 // nu x nv patches of the given widths (nu) and heights (nv); periodic directions wrap around
 // (a torus if both; then nu, nv >= 3 so that the gluing is unambiguous).
-PatchLayout make_grid_layout(const std::vector<int64_t>& widths, const std::vector<int64_t>& heights,
-                             bool periodic_u, bool periodic_v);
+PatchLayout make_grid_layout(const std::vector<int64_t>& widths, const std::vector<int64_t>& heights, bool periodic_u,
+                             bool periodic_v);
 
 // Surface of a union of voxels of a rectilinear grid with cell sizes dx, dy, dz (ticks): one patch
 // per boundary voxel face. `voxels` lists (i,j,k). Sharp edges become feature sides if requested.

@@ -45,17 +45,17 @@ std::vector<std::string> manifold_mesh_files() {
       if (!name.empty()) names.push_back(name);
     return names;
   }
-  return {"armadillo.obj", "beetle.off",    "block.obj",          "bunny.off",
-          "camelhead.off", "decimated-max.obj", "dragon-genus1.obj", "face.obj",
-          "fandisk.obj",   "fertility.off", "igea.ply",           "joint.obj",
-          "joint_rem_p.obj", "kitten.obj",  "mnf07HeadFem_rem_rem_p.obj", "nefertiti.obj",
-          "rocker-arm.obj", "spot.obj",     "stanford-bunny.obj", "torus.obj",
-          "wingnut.obj"};
+  return {
+      "armadillo.obj",     "beetle.off",        "block.obj",       "bunny.off",          "camelhead.off",
+      "decimated-max.obj", "dragon-genus1.obj", "face.obj",        "fandisk.obj",        "fertility.off",
+      "igea.ply",          "joint.obj",         "joint_rem_p.obj", "kitten.obj",         "mnf07HeadFem_rem_rem_p.obj",
+      "nefertiti.obj",     "rocker-arm.obj",    "spot.obj",        "stanford-bunny.obj", "torus.obj",
+      "wingnut.obj"};
 }
 
 std::vector<std::string> quick_mesh_files() {
-  return {"spot.obj", "bunny.off", "torus.obj", "fertility.off", "fandisk.obj", "joint.obj",
-          "camelhead.off", "wingnut.obj"};
+  return {"spot.obj",    "bunny.off", "torus.obj",     "fertility.off",
+          "fandisk.obj", "joint.obj", "camelhead.off", "wingnut.obj"};
 }
 
 IntakeResult load_mesh(const std::string& name) {
@@ -85,12 +85,13 @@ void infer_rotations(const TriMesh& mesh, Parametrization& param) {
 
 SyntheticParametrized make_grid_cube(int n) {
   // Side frames (a, b) with a x b = outward normal.
-  struct Side { Vec3 origin, a, b; };
+  struct Side {
+    Vec3 origin, a, b;
+  };
   const double N = n;
-  const Side sides[6] = {
-      {{0, 0, N}, Vec3::UnitX(), Vec3::UnitY()},  {{0, 0, 0}, Vec3::UnitY(), Vec3::UnitX()},
-      {{N, 0, 0}, Vec3::UnitY(), Vec3::UnitZ()},  {{0, 0, 0}, Vec3::UnitZ(), Vec3::UnitY()},
-      {{0, N, 0}, Vec3::UnitZ(), Vec3::UnitX()},  {{0, 0, 0}, Vec3::UnitX(), Vec3::UnitZ()}};
+  const Side sides[6] = {{{0, 0, N}, Vec3::UnitX(), Vec3::UnitY()}, {{0, 0, 0}, Vec3::UnitY(), Vec3::UnitX()},
+                         {{N, 0, 0}, Vec3::UnitY(), Vec3::UnitZ()}, {{0, 0, 0}, Vec3::UnitZ(), Vec3::UnitY()},
+                         {{0, N, 0}, Vec3::UnitZ(), Vec3::UnitX()}, {{0, 0, 0}, Vec3::UnitX(), Vec3::UnitZ()}};
   std::map<std::array<long, 3>, int> vertex_id;
   std::vector<Vec3> positions;
   std::vector<std::array<int, 3>> tris;
@@ -104,7 +105,9 @@ SyntheticParametrized make_grid_cube(int n) {
   for (const Side& s : sides)
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
-        const Vec2 q[4] = {{double(i), double(j)}, {double(i + 1), double(j)}, {double(i + 1), double(j + 1)},
+        const Vec2 q[4] = {{double(i), double(j)},
+                           {double(i + 1), double(j)},
+                           {double(i + 1), double(j + 1)},
                            {double(i), double(j + 1)}};
         int id[4];
         for (int k = 0; k < 4; ++k) id[k] = vid(s.origin + q[k].x() * s.a + q[k].y() * s.b);

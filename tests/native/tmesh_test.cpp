@@ -4,8 +4,8 @@
 // boundaries, features, no singularities, flipped maps).
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <map>
 #include <random>
 #include <sstream>
@@ -161,7 +161,7 @@ void expect_valid(const Case& c, const TMesh& tm) {
         last_sign = sg;
       }
     EXPECT_TRUE(first_sign > 0 || last_sign > 0) << "edge could have been oriented positively";
-    }
+  }
   // Features and boundaries are T-mesh edges: total length matches.
   double wall_length_mesh = 0;
   for (int me = 0; me < mesh.num_edges(); ++me)
@@ -236,7 +236,8 @@ void expect_valid(const Case& c, const TMesh& tm) {
           if (std::fabs(P.a[fixed] - Q.a[fixed]) > eps) continue;
           const double lo = std::max(std::min(P.a[moving], P.b[moving]), std::min(Q.a[moving], Q.b[moving]));
           const double hi = std::min(std::max(P.a[moving], P.b[moving]), std::max(Q.a[moving], Q.b[moving]));
-          if (hi > lo + eps) ++violations;
+          if (hi > lo + eps)
+            ++violations;
           else if (hi >= lo - eps) {
             Vec2 X = P.a;
             X[moving] = lo;
@@ -284,7 +285,6 @@ TEST(TMesh, TorusWithoutSingularitiesUsesASeed) {
   EXPECT_EQ(tm.nodes[0].kind, TMeshNode::Kind::Seed);
   EXPECT_GT(tm.stats.cut_crossings + tm.stats.cut_vertex_passes, 0);
 }
-
 
 Case polycube_case(const std::string& name, const test::PolycubeSpec& spec, bool creases_as_features = false) {
   const test::Polycube pc = test::make_polycube(spec);
@@ -667,10 +667,11 @@ void quad_map_case(const std::string& file, double sharp_deg, std::array<int, 3>
     boundary += c.mesh.is_boundary_edge(e);
     features += !c.features.empty() && c.features[e];
   }
-  std::printf("[tmesh] %-24s %7d triangles, %4d feature + %4d boundary edges -> %6zu nodes %6zu edges %6zu cells, "
-              "%5d T-junctions, %6d separatrices, trace %.3f s\n",
-              c.name.c_str(), c.mesh.num_faces(), features, boundary, tm.nodes.size(), tm.edges.size(), tm.cells.size(),
-              check.t_junctions, tm.stats.motorcycles, tm.stats.trace_seconds);
+  std::printf(
+      "[tmesh] %-24s %7d triangles, %4d feature + %4d boundary edges -> %6zu nodes %6zu edges %6zu cells, "
+      "%5d T-junctions, %6d separatrices, trace %.3f s\n",
+      c.name.c_str(), c.mesh.num_faces(), features, boundary, tm.nodes.size(), tm.edges.size(), tm.cells.size(),
+      check.t_junctions, tm.stats.motorcycles, tm.stats.trace_seconds);
   expect_valid(c, tm);
 }
 
@@ -709,13 +710,15 @@ void session_tmesh_cases(const std::string& name, double sharp_angle_deg) {
   ASSERT_EQ(error, "") << name;
   for (size_t k = 0; k < session.components().size(); ++k) {
     const ComponentState& state = session.components()[k];
-    Case c{name + (sharp_angle_deg > 0 ? " features" : ""), state.mesh, state.traced->exact, state.traced->isoline_edges};
+    Case c{name + (sharp_angle_deg > 0 ? " features" : ""), state.mesh, state.traced->exact,
+           state.traced->isoline_edges};
     const TMesh& tm = state.traced->tmesh;
     const TMeshCheck check = check_tmesh(tm);
-    std::printf("[session tmesh] %-32s %7d triangles, %4d singularities -> %6zu nodes %6zu edges %6zu cells, "
-                "%5d T-junctions, trace %.3f s\n",
-                c.name.c_str(), c.mesh.num_faces(), state.field->num_singularities, tm.nodes.size(), tm.edges.size(),
-                tm.cells.size(), check.t_junctions, tm.stats.trace_seconds);
+    std::printf(
+        "[session tmesh] %-32s %7d triangles, %4d singularities -> %6zu nodes %6zu edges %6zu cells, "
+        "%5d T-junctions, trace %.3f s\n",
+        c.name.c_str(), c.mesh.num_faces(), state.field->num_singularities, tm.nodes.size(), tm.edges.size(),
+        tm.cells.size(), check.t_junctions, tm.stats.trace_seconds);
     expect_valid(c, tm);
   }
 }

@@ -37,8 +37,8 @@ TEST_P(WorkingMeshOverMeshes, KeepsTopologyFeaturesAndShape) {
   const int budget = std::max(200, mesh.num_faces() / 4);
   Progress progress;
   const WorkingMesh w = make_working_mesh(mesh, features, budget, progress);
-  std::cout << name << ": " << mesh.num_faces() << " -> " << w.mesh.num_faces() << " faces (budget " << budget
-            << ")" << std::endl;
+  std::cout << name << ": " << mesh.num_faces() << " -> " << w.mesh.num_faces() << " faces (budget " << budget << ")"
+            << std::endl;
   if (!w.decimated) {
     // Only when no vertex may go: every one lies on a feature (joint, block at 40 degrees).
     std::vector<char> locked(mesh.num_vertices(), 0);

@@ -28,17 +28,17 @@ typedef enum qgp_status {
   QGP_ERR_INVALID_MESH = 2,     /* the mesh is unusable (NaN, bad index, non-manifold, ...) */
   QGP_ERR_UNREADABLE_FILE = 3,  /* the file cannot be opened or parsed */
   /* 4 is not used (it was "stage not built yet"); the numbers of the others stay. */
-  QGP_ERR_STAGE_FAILED = 5,     /* a stage ran but produced no valid result */
-  QGP_ERR_CANCELLED = 6,        /* the job was cancelled */
-  QGP_ERR_BUSY = 7,             /* a job is running on this session */
-  QGP_ERR_INTERNAL = 8,         /* unexpected internal error (a bug) */
-  QGP_ERR_NOT_READY = 9         /* no result of that kind is available */
+  QGP_ERR_STAGE_FAILED = 5, /* a stage ran but produced no valid result */
+  QGP_ERR_CANCELLED = 6,    /* the job was cancelled */
+  QGP_ERR_BUSY = 7,         /* a job is running on this session */
+  QGP_ERR_INTERNAL = 8,     /* unexpected internal error (a bug) */
+  QGP_ERR_NOT_READY = 9     /* no result of that kind is available */
 } qgp_status;
 
 typedef enum qgp_job {
-  QGP_JOB_INTAKE = 0,  /* validate, repair, classify */
-  QGP_JOB_REMESH = 1,  /* the whole pipeline up to the quad mesh */
-  QGP_JOB_GRID_UV = 2  /* the whole pipeline up to the integer-grid map */
+  QGP_JOB_INTAKE = 0, /* validate, repair, classify */
+  QGP_JOB_REMESH = 1, /* the whole pipeline up to the quad mesh */
+  QGP_JOB_GRID_UV = 2 /* the whole pipeline up to the integer-grid map */
 } qgp_job;
 
 typedef enum qgp_job_state {
@@ -105,8 +105,8 @@ QGP_API int qgp_report_json(qgp_session* session, char* buffer, int64_t buffer_s
  *  input_vertex: nv input indices). Any array pointer may be null. */
 QGP_API int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
                               int64_t* num_components);
-QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
-                             int32_t* component, int32_t* input_vertex);
+QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* component,
+                             int32_t* input_vertex);
 
 /* The quad mesh of the last successful remesh job: counts, then vertices (nv x 3), quads
  * (nq x 4 vertex indices, counter-clockwise) and per quad the input face it lies on (nq).
@@ -139,9 +139,8 @@ QGP_API int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int
  * the NUL); *needed gets its size; QGP_ERR_INVALID_ARGUMENT if the buffer is too small. */
 QGP_API int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes,
                                      int64_t num_faces, const int32_t* corners, const double* ref_vertices,
-                                     int64_t num_ref_vertices, const int32_t* ref_triangles,
-                                     int64_t num_ref_triangles, double sharp_angle_deg, char* json,
-                                     int64_t json_size, int64_t* needed);
+                                     int64_t num_ref_vertices, const int32_t* ref_triangles, int64_t num_ref_triangles,
+                                     double sharp_angle_deg, char* json, int64_t json_size, int64_t* needed);
 
 /* Reading a mesh file as it is (polygons, no repair), e.g. to import it into Blender. */
 typedef struct qgp_soup qgp_soup;

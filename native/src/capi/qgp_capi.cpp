@@ -125,9 +125,7 @@ void run_job(qgp_session* s, qgp::Job job) {
   s->job_status = status;
   s->error = message;
   s->report_json = std::move(report);
-  s->state = status == QGP_OK ? QGP_STATE_DONE
-             : status == QGP_ERR_CANCELLED ? QGP_STATE_CANCELLED
-                                           : QGP_STATE_FAILED;
+  s->state = status == QGP_OK ? QGP_STATE_DONE : status == QGP_ERR_CANCELLED ? QGP_STATE_CANCELLED : QGP_STATE_FAILED;
   s->fraction = status == QGP_OK ? 1.0 : s->fraction;
   s->finished.notify_all();
 }
@@ -140,8 +138,8 @@ const char* qgp_version(void) { return QGP_VERSION; }
 
 const char* qgp_last_error(void) { return t_last_error.c_str(); }
 
-int qgp_session_create(const double* vertices, int64_t num_vertices, const int32_t* triangles,
-                       int64_t num_triangles, qgp_session** out_session) {
+int qgp_session_create(const double* vertices, int64_t num_vertices, const int32_t* triangles, int64_t num_triangles,
+                       qgp_session** out_session) {
   return guarded(nullptr, [&] {
     require(out_session != nullptr, "out_session is null");
     *out_session = nullptr;
@@ -237,7 +235,8 @@ int qgp_session_set_option_string(qgp_session* session, const char* name, const 
     if (std::string(name) == "quantizer") {
       options.quantizer = qgp::parse_quantizer(value);
     } else {
-      throw qgp::Error(qgp::ErrorCode::InvalidArgument, "unknown string option '" + std::string(name) + "' (quantizer)");
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument,
+                       "unknown string option '" + std::string(name) + "' (quantizer)");
     }
     session->session->set_options(options);
     return QGP_OK;
@@ -275,8 +274,7 @@ int qgp_job_start(qgp_session* session, int job) {
   });
 }
 
-int qgp_job_poll(qgp_session* session, int* state, double* fraction, char* stage_buffer,
-                 int64_t stage_buffer_size) {
+int qgp_job_poll(qgp_session* session, int* state, double* fraction, char* stage_buffer, int64_t stage_buffer_size) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     std::lock_guard<std::mutex> lock(session->mutex);
@@ -331,8 +329,7 @@ int qgp_report_json(qgp_session* session, char* buffer, int64_t buffer_size, int
   });
 }
 
-int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
-                      int64_t* num_components) {
+int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles, int64_t* num_components) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
@@ -407,8 +404,7 @@ int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
     require(session != nullptr, "session is null");
     require_idle(session);
     const std::vector<double>& corner_uv = session->session->corner_uv();
-    if (corner_uv.empty())
-      throw qgp::Error(qgp::ErrorCode::NotReady, "no grid UVs: run a grid-UV job first");
+    if (corner_uv.empty()) throw qgp::Error(qgp::ErrorCode::NotReady, "no grid UVs: run a grid-UV job first");
     if (uv) std::copy(corner_uv.begin(), corner_uv.end(), uv);
     if (cuts)
       for (const auto& e : session->session->cut_edges()) {
@@ -455,10 +451,10 @@ int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* tr
   });
 }
 
-int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes,
-                             int64_t num_faces, const int32_t* corners, const double* ref_vertices,
-                             int64_t num_ref_vertices, const int32_t* ref_triangles, int64_t num_ref_triangles,
-                             double sharp_angle_deg, char* json, int64_t json_size, int64_t* needed) {
+int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes, int64_t num_faces,
+                             const int32_t* corners, const double* ref_vertices, int64_t num_ref_vertices,
+                             const int32_t* ref_triangles, int64_t num_ref_triangles, double sharp_angle_deg,
+                             char* json, int64_t json_size, int64_t* needed) {
   return guarded(nullptr, [&] {
     require(num_vertices >= 0 && num_faces >= 0 && num_ref_vertices >= 0 && num_ref_triangles >= 0,
             "counts must not be negative");

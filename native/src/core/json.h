@@ -13,7 +13,7 @@ using Json = nlohmann::ordered_json;
 
 // Defines to_json(qgp::Json&, const Type&) writing the listed members, in order, under their names.
 // Use inside the namespace of Type.
-#define QGP_JSON_FIELDS(Type, ...)                                              \
+#define QGP_JSON_FIELDS(Type, ...)                                                 \
   inline void to_json(::qgp::Json& nlohmann_json_j, const Type& nlohmann_json_t) { \
-    NLOHMANN_JSON_EXPAND(NLOHMANN_JSON_PASTE(NLOHMANN_JSON_TO, __VA_ARGS__))    \
+    NLOHMANN_JSON_EXPAND(NLOHMANN_JSON_PASTE(NLOHMANN_JSON_TO, __VA_ARGS__))       \
   }

@@ -11,7 +11,8 @@ Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& 
   Vec2 corner[8], side[8];
   for (int k = 0; k < 8; ++k) {
     side[k] = Vec2(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
-    corner[k] = centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
+    corner[k] =
+        centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
   }
   auto inside = [&](const Vec2& d) {
     for (const Vec2& u : side)

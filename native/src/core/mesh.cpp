@@ -36,16 +36,15 @@ void build_connectivity(TriMesh& mesh) {
     const int h0 = keyed[i].second;
     if (j - i > 2)
       throw Error(ErrorCode::InvalidMesh, "edge (" + std::to_string(mesh.from(h0)) + ", " +
-                                              std::to_string(mesh.to(h0)) + ") has " +
-                                              std::to_string(j - i) + " faces");
+                                              std::to_string(mesh.to(h0)) + ") has " + std::to_string(j - i) +
+                                              " faces");
     const int e = static_cast<int>(mesh.edge_halfedge.size());
     mesh.edge_halfedge.push_back(h0);
     mesh.edge_of[h0] = e;
     if (j - i == 2) {
       const int h1 = keyed[i + 1].second;
       if (mesh.from(h0) == mesh.from(h1))
-        throw Error(ErrorCode::InvalidMesh, "faces " + std::to_string(h0 / 3) + " and " +
-                                                std::to_string(h1 / 3) +
+        throw Error(ErrorCode::InvalidMesh, "faces " + std::to_string(h0 / 3) + " and " + std::to_string(h1 / 3) +
                                                 " are inconsistently oriented");
       mesh.opposite[h0] = h1;
       mesh.opposite[h1] = h0;

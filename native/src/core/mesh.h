@@ -39,7 +39,10 @@ struct TriMesh {
   // Next outgoing halfedge counter-clockwise around from(h); -1 past a boundary.
   int rotate_ccw(int h) const { return opposite[prev(h)]; }
   // Next outgoing halfedge clockwise around from(h); -1 past a boundary.
-  int rotate_cw(int h) const { int o = opposite[h]; return o < 0 ? -1 : next(o); }
+  int rotate_cw(int h) const {
+    int o = opposite[h];
+    return o < 0 ? -1 : next(o);
+  }
 
   Vec3 position(int v) const { return V.row(v).transpose(); }
   Vec3 edge_vector(int h) const { return position(to(h)) - position(from(h)); }

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 
 #include "core/error.h"
 
@@ -164,8 +164,10 @@ Expr cut_equation(int wedge_g, int wedge_f, int rotation, int t) {
   // Merge duplicates (a wedge on both sides of a cut at a singular leaf).
   Expr merged;
   for (const auto& term : e) {
-    if (!merged.empty() && merged.back().first == term.first) merged.back().second = merged.back().second + term.second;
-    else merged.push_back(term);
+    if (!merged.empty() && merged.back().first == term.first)
+      merged.back().second = merged.back().second + term.second;
+    else
+      merged.push_back(term);
   }
   merged.erase(std::remove_if(merged.begin(), merged.end(), [](const auto& x) { return x.second.zero(); }),
                merged.end());
@@ -215,17 +217,17 @@ class GaussianSanitizer {
   std::vector<int> wedge_of_, wedge_vertex_;
   int nw_ = 0;
   std::vector<std::array<double, 2>> value_;  // continuous value of each variable
-  std::vector<int> translation_var_;           // per halfedge: its translation variable, or -1
+  std::vector<int> translation_var_;          // per halfedge: its translation variable, or -1
   std::vector<char> snapped_;
-  std::vector<uint8_t> snap_axes_;             // bit 0 = u, bit 1 = v rounded to snap units
+  std::vector<uint8_t> snap_axes_;  // bit 0 = u, bit 1 = v rounded to snap units
   std::vector<Expr> equations_;
   std::vector<Expr> definition_;  // definition[v]: v in terms of variables free when eliminated
   std::vector<char> eliminated_;
-  std::vector<int> order_;        // eliminated variables in elimination order
+  std::vector<int> order_;  // eliminated variables in elimination order
   std::vector<int> wedges_at_vertex_;
   int unresolved_ = 0;
-  double scale_ = 1;              // grid units per parameter unit
-  std::vector<IVec2> exact_;      // exact value of every variable
+  double scale_ = 1;          // grid units per parameter unit
+  std::vector<IVec2> exact_;  // exact value of every variable
   SanitizeResult result_;
 };
 
@@ -417,7 +419,8 @@ void GaussianSanitizer::round_and_back_substitute() {
   }
   for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
     Gauss sum{0, 0};
-    for (const auto& term : definition_[*it]) sum = sum + term.second * Gauss{exact_[term.first][0], exact_[term.first][1]};
+    for (const auto& term : definition_[*it])
+      sum = sum + term.second * Gauss{exact_[term.first][0], exact_[term.first][1]};
     exact_[*it] = {sum.re, sum.im};
   }
 }

@@ -54,11 +54,11 @@ std::vector<double> parametric_areas(const Parametrization& param);
 using IVec2 = std::array<int64_t, 2>;
 
 struct ExactParametrization {
-  int fraction_bits = 0;          // coordinate = integer * 2^-fraction_bits
-  std::vector<IVec2> uv;          // 3#F corners
-  std::vector<int8_t> rotation;   // 3#F, as in Parametrization
-  std::vector<IVec2> translation; // 3#F (0 on non-cut and boundary halfedges)
-  std::vector<char> is_cut;       // #E
+  int fraction_bits = 0;           // coordinate = integer * 2^-fraction_bits
+  std::vector<IVec2> uv;           // 3#F corners
+  std::vector<int8_t> rotation;    // 3#F, as in Parametrization
+  std::vector<IVec2> translation;  // 3#F (0 on non-cut and boundary halfedges)
+  std::vector<char> is_cut;        // #E
 
   int64_t one() const { return int64_t(1) << fraction_bits; }  // the integer that means 1.0
   double to_double(int64_t c) const { return std::ldexp(static_cast<double>(c), -fraction_bits); }
@@ -85,8 +85,8 @@ struct SanitizeOptions {
 
 struct SanitizeResult {
   ExactParametrization param;
-  double max_change = 0;        // largest |exact - continuous| over all corners (uv units)
-  int unresolved_equations = 0; // transition equations that could not be satisfied (0 expected)
+  double max_change = 0;         // largest |exact - continuous| over all corners (uv units)
+  int unresolved_equations = 0;  // transition equations that could not be satisfied (0 expected)
   // sanitize_with_isolines only, of the faces positive in the continuous map: those whose rounded
   // corners were not positively oriented and that moving free unknowns on the grid made positive,
   // and those still not positive after that (0 expected).

@@ -12,8 +12,7 @@ class Progress {
   using Callback = std::function<void(const std::string& stage, double fraction)>;
 
   Progress() = default;
-  Progress(Callback callback, const std::atomic<bool>* cancel)
-      : callback_(std::move(callback)), cancel_(cancel) {}
+  Progress(Callback callback, const std::atomic<bool>* cancel) : callback_(std::move(callback)), cancel_(cancel) {}
 
   // Enters a named stage (fraction 0). Throws Error(Cancelled) if cancel was requested.
   void begin_stage(const std::string& stage);

@@ -1,8 +1,8 @@
 #include "core/sanitize_isolines.h"
 
 #include <algorithm>
-#include <cmath>
 #include <climits>
+#include <cmath>
 #include <cstdlib>
 #include <numeric>
 
@@ -38,8 +38,10 @@ Expr make_expr(std::vector<std::pair<int, int64_t>> terms) {
   std::sort(terms.begin(), terms.end());
   Expr out;
   for (const auto& t : terms) {
-    if (!out.empty() && out.back().first == t.first) out.back().second += t.second;
-    else out.push_back(t);
+    if (!out.empty() && out.back().first == t.first)
+      out.back().second += t.second;
+    else
+      out.push_back(t);
   }
   out.erase(std::remove_if(out.begin(), out.end(), [](const auto& t) { return t.second == 0; }), out.end());
   return out;
@@ -49,7 +51,7 @@ Expr make_expr(std::vector<std::pair<int, int64_t>> terms) {
 std::pair<int, int> rotated_component(int r, int axis) {
   switch (((r % 4) + 4) % 4) {
     case 0: return {axis, 1};
-    case 1: return axis == 0 ? std::pair{1, -1} : std::pair{0, 1};   // (-y, x)
+    case 1: return axis == 0 ? std::pair{1, -1} : std::pair{0, 1};  // (-y, x)
     case 2: return {axis, -1};
     default: return axis == 0 ? std::pair{1, 1} : std::pair{0, -1};  // (y, -x)
   }
@@ -99,8 +101,7 @@ void reorient_faces(const TriMesh& mesh, const std::vector<int>& wedge_of, const
       const IVec2 p = {base[0] + d[0], base[1] + d[1]};
       for (int i = start[w]; i < start[w + 1]; ++i) uv[corners[i]] = p;
       bool ok = positive(target);
-      for (int i = start[w]; ok && i < start[w + 1]; ++i)
-        ok = !was_positive[i - start[w]] || positive(corners[i] / 3);
+      for (int i = start[w]; ok && i < start[w + 1]; ++i) ok = !was_positive[i - start[w]] || positive(corners[i] / 3);
       if (ok) return true;
     }
     for (int i = start[w]; i < start[w + 1]; ++i) uv[corners[i]] = base;
@@ -116,8 +117,10 @@ void reorient_faces(const TriMesh& mesh, const std::vector<int>& wedge_of, const
       bool fixed = false;
       for (int k = 0; k < 3 && !fixed; ++k)
         if (movable[wedge_of[3 * f + k]]) fixed = move_wedge(wedge_of[3 * f + k], f);
-      if (fixed) changed = true;
-      else still.push_back(f);
+      if (fixed)
+        changed = true;
+      else
+        still.push_back(f);
     }
     bad.swap(still);
   }
@@ -193,18 +196,18 @@ class IsolineSanitizer {
   const int nf_, nc_;
   std::vector<int> wedge_of_, wedge_vertex_;
   int nw_ = 0;
-  std::vector<double> value_;       // continuous value of each unknown
-  std::vector<char> snapped_;       // unknowns rounded to snap units and never changed
+  std::vector<double> value_;  // continuous value of each unknown
+  std::vector<char> snapped_;  // unknowns rounded to snap units and never changed
   std::vector<int> wedges_at_vertex_;
   std::vector<int> translation_var_;  // per halfedge: its first translation unknown, or -1
   std::vector<Expr> equations_;
-  std::vector<char> in_equation_;   // unknowns that occur in some equation
-  std::vector<Expr> definition_;    // definition[x] expresses x by unknowns free at that time
+  std::vector<char> in_equation_;  // unknowns that occur in some equation
+  std::vector<Expr> definition_;   // definition[x] expresses x by unknowns free at that time
   std::vector<char> eliminated_;
-  std::vector<int> order_;          // eliminated unknowns in elimination order
+  std::vector<int> order_;  // eliminated unknowns in elimination order
   int unresolved_ = 0;
-  double scale_ = 1;                // grid units per parameter unit
-  std::vector<int64_t> exact_;      // exact value of every unknown
+  double scale_ = 1;            // grid units per parameter unit
+  std::vector<int64_t> exact_;  // exact value of every unknown
   SanitizeResult result_;
 };
 
@@ -247,7 +250,8 @@ void IsolineSanitizer::build_wedges() {
   std::vector<int> root_wedge(nc_, -1);
   for (int c = 0; c < nc_; ++c) {
     const int r = find(c);
-    if (root_wedge[r] < 0) root_wedge[r] = static_cast<int>(wedge_vertex_.size()), wedge_vertex_.push_back(mesh_.F(c / 3, c % 3));
+    if (root_wedge[r] < 0)
+      root_wedge[r] = static_cast<int>(wedge_vertex_.size()), wedge_vertex_.push_back(mesh_.F(c / 3, c % 3));
     wedge_of_[c] = root_wedge[r];
   }
   nw_ = static_cast<int>(wedge_vertex_.size());
@@ -265,7 +269,8 @@ void IsolineSanitizer::init_wedge_unknowns() {
   for (int w = 0; w < nw_; ++w) value_[2 * w] /= count[w], value_[2 * w + 1] /= count[w];
   snapped_.assign(2 * nw_, 0);
   for (int w = 0; w < nw_; ++w)
-    if (!options_.snap_vertex.empty() && options_.snap_vertex[wedge_vertex_[w]]) snapped_[2 * w] = snapped_[2 * w + 1] = 1;
+    if (!options_.snap_vertex.empty() && options_.snap_vertex[wedge_vertex_[w]])
+      snapped_[2 * w] = snapped_[2 * w + 1] = 1;
   if (!options_.snap_corner_axes.empty())
     for (int c = 0; c < nc_; ++c)
       for (int a = 0; a < 2; ++a)
@@ -306,7 +311,8 @@ void IsolineSanitizer::build_equations(const std::vector<IsolineConstraint>& iso
     const int h = iso.halfedge;
     if (h < 0 || h >= nc_ || iso.axis < 0 || iso.axis > 1)
       throw Error(ErrorCode::InvalidArgument, "sanitize: isoline constraint out of range");
-    equations_.push_back(make_expr({{2 * wedge_of_[h] + iso.axis, 1}, {2 * wedge_of_[TriMesh::next(h)] + iso.axis, -1}}));
+    equations_.push_back(
+        make_expr({{2 * wedge_of_[h] + iso.axis, 1}, {2 * wedge_of_[TriMesh::next(h)] + iso.axis, -1}}));
   }
   for (Expr& e : later) equations_.push_back(std::move(e));
 }

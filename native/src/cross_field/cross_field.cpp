@@ -78,8 +78,8 @@ bool is_feature_halfedge(const TriMesh& mesh, const std::vector<char>& feature_e
 // kAligned (one feature edge), kCornerCompromise (two or three feature edges), or free.
 enum ConstraintKind : char { kFree = 0, kAligned = 1, kCornerCompromise = 2, kSectorCompromise = 3 };
 
-ConstraintKind face_constraint(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge,
-                               int f, double* theta) {
+ConstraintKind face_constraint(const TriMesh& mesh, const FaceFrames& fr, const std::vector<char>& feature_edge, int f,
+                               double* theta) {
   bool is_feature[3];
   int count = 0;
   for (int k = 0; k < 3; ++k) count += is_feature[k] = is_feature_halfedge(mesh, feature_edge, 3 * f + k);
@@ -229,8 +229,8 @@ ComplexSparse smoothness_matrix(const TriMesh& mesh, const FaceFrames& fr, const
     const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
     if (o < 0) continue;
     const int f = h / 3, g = o / 3;
-    const double transport = transfer_angle(0, proxy.e1[f], proxy.e2[f], proxy.normal[f], proxy.normal[g],
-                                            proxy.e1[g], proxy.e2[g], mesh.edge_vector(h).normalized());
+    const double transport = transfer_angle(0, proxy.e1[f], proxy.e2[f], proxy.normal[f], proxy.normal[g], proxy.e1[g],
+                                            proxy.e2[g], mesh.edge_vector(h).normalized());
     const Complex rho = std::polar(1.0, 4 * transport);
     const double w = 1.5 * mesh.edge_vector(h).squaredNorm() / (fr.area[f] + fr.area[g]);
     triplets.emplace_back(f, f, w);
@@ -261,13 +261,13 @@ void factorize(Solver& solver, const ComplexSparse& A, const Progress& progress)
   progress.check_cancel();
   solver.factorize(A);
   if (solver.info() != Eigen::Success)
-    throw Error(ErrorCode::StageFailed, "cross field: sparse factorization failed (" +
-                                            std::to_string(A.rows()) + " unknowns)");
+    throw Error(ErrorCode::StageFailed,
+                "cross field: sparse factorization failed (" + std::to_string(A.rows()) + " unknowns)");
 }
 
 // Power field with the constrained faces fixed: minimizes the energy over the free faces.
-ComplexVector solve_constrained(const ComplexSparse& A, const std::vector<char>& fixed,
-                                const ComplexVector& z_fixed, Progress& progress) {
+ComplexVector solve_constrained(const ComplexSparse& A, const std::vector<char>& fixed, const ComplexVector& z_fixed,
+                                Progress& progress) {
   const int n = static_cast<int>(A.rows());
   std::vector<int> free_index(n, -1);
   int num_free = 0;
@@ -281,8 +281,10 @@ ComplexVector solve_constrained(const ComplexSparse& A, const std::vector<char>&
     for (ComplexSparse::InnerIterator it(A, col); it; ++it) {
       const int row = static_cast<int>(it.row());
       if (fixed[row]) continue;
-      if (fixed[col]) rhs[free_index[row]] -= it.value() * z_fixed[col];
-      else triplets.emplace_back(free_index[row], free_index[col], it.value());
+      if (fixed[col])
+        rhs[free_index[row]] -= it.value() * z_fixed[col];
+      else
+        triplets.emplace_back(free_index[row], free_index[col], it.value());
     }
   ComplexSparse A_free(num_free, num_free);
   A_free.setFromTriplets(triplets.begin(), triplets.end());
@@ -450,7 +452,11 @@ int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feat
       if (s.minimum_ok(s.turns)) continue;
       const long d = s.first >= 0 && s.crossed.empty() && s.turns > 1 ? -1 : 1;  // one quarter turn per pass
       // kind 0: rho(first) += d; kind 1: rho(last) -= d; kind 2: eps(crossed) += d (quarter turns).
-      struct Move { int kind, h; double deviation; int other; };
+      struct Move {
+        int kind, h;
+        double deviation;
+        int other;
+      };
       std::vector<Move> moves;
       if (s.first >= 0) {
         moves.push_back({0, s.first, rho[s.first] + d * kQuarter, closes[s.first]});
@@ -527,8 +533,8 @@ void solve_free_faces(const TriMesh& mesh, const FaceFrames& fr, const CrossFiel
                                               : smallest_eigenvector(A, fr.area, progress);
   for (int f = 0; f < nf; ++f)
     if (!field.constrained_face[f])
-      theta[f] = transfer_angle(std::arg(z[f]) / 4, proxy.e1[f], proxy.e2[f], proxy.normal[f], fr.normal[f],
-                                fr.e1[f], fr.e2[f]);
+      theta[f] = transfer_angle(std::arg(z[f]) / 4, proxy.e1[f], proxy.e2[f], proxy.normal[f], fr.normal[f], fr.e1[f],
+                                fr.e2[f]);
 }
 
 // Isoline sectors of feature/boundary halfedges, each from its own face (nearest axis), into

@@ -45,57 +45,57 @@ struct CrossFieldOptions {
 };
 
 struct CrossField {
-  std::vector<Vec3> direction;        // #F: unit tangent vector, one of the four cross directions
-  std::vector<int8_t> matching;       // 3#F: quarter turns r(h), same convention as
-                                      // Parametrization::rotation (chart of face(h) -> chart of the
-                                      // opposite face when each face's +u axis is direction[f]):
-                                      // the edge vector in the opposite chart is R^r times the edge
-                                      // vector in face(h)'s chart up to a residual rotation:
-                                      // across ordinary edges r is the nearest quarter turn
-                                      // (residual <= 45deg); across feature edges r keeps both
-                                      // sides' isoline sectors (see edge_sector; residual <=
-                                      // 90deg). 0 on boundary halfedges;
-                                      // matching[opposite] = (4 - matching[h]) % 4.
-  std::vector<int> vertex_index;      // #V: singularity index in quarter turns (4 - valence of the
-                                      // quad-mesh vertex: +1 at a cube corner) = (angle defect -
-                                      // sum of the residual rotations left by the matchings
-                                      // around the vertex) / 90deg, an exact integer. Boundary
-                                      // vertices use the boundary version of Poincare-Hopf (2 -
-                                      // number of quads at the vertex: +1 at a 90deg corner):
-                                      // (pi - angle sum - residuals + how far the two boundary
-                                      // edges are off their isolines) / 90deg. Interior vertices:
-                                      // index = sum of the matchings around them, mod 4.
-  std::vector<char> feature_edge;     // #E: feature edges in use (caller + dihedral); boundaries
-                                      // are features too but are not flagged here
-  std::vector<char> constrained_face; // #F: how the direction was fixed: 0 free (smoothest),
-                                      // 1 aligned to its one feature edge, 2 compromise of its
-                                      // two (three) feature edges, 3 compromise of an acute
-                                      // sector at one of its vertices (see above)
-  std::vector<int8_t> edge_sector;    // 3#F: for halfedges of feature and boundary edges, the
-                                      // isoline sector q: the halfedge vector runs along R^q(+u)
-                                      // of face(h)'s chart (q even: the edge runs along u, so v
-                                      // is constant on it; q odd: u is constant); the nearest
-                                      // axis in face(h) (off by at most 45deg; up to 90deg
-                                      // where a collapsed sector was resolved). Consistent
-                                      // across interior feature edges:
-                                      //   q(opposite) = (q(h) + matching[h] + 2) % 4.
-                                      // -1 on all other halfedges.
-  int num_overconstrained_faces = 0;  // faces with three feature/boundary edges: no triangle can
-                                      // have all three on isolines (the seamless map must give
-                                      // one up or the face must be split)
-  int num_collapsed_sectors = 0;      // sectors between consecutive feature/boundary edges around
-                                      // a vertex that map to no quarter turn (or, one face wide,
-                                      // not to exactly one): the seamless map must degenerate
-                                      // there. Only around over-constrained faces on the shared
-                                      // meshes (plus 2 on cow.obj at 40deg).
-  int num_resolved_sectors = 0;       // quarter turns moved into sectors that would have
-                                      // collapsed (or interior vertices of index > +1) from a
-                                      // neighbour: one matching (|residual| < 135deg) or one
-                                      // edge_sector (|rho| < 90deg) per move (see
-                                      // resolve_collapsed_sectors in cross_field.cpp)
-  int num_singularities = 0;          // vertices with vertex_index != 0
-  int index_sum = 0;                  // sum of vertex_index (quarter turns) = 4 * chi
-  int euler_characteristic = 0;       // of the mesh
+  std::vector<Vec3> direction;         // #F: unit tangent vector, one of the four cross directions
+  std::vector<int8_t> matching;        // 3#F: quarter turns r(h), same convention as
+                                       // Parametrization::rotation (chart of face(h) -> chart of the
+                                       // opposite face when each face's +u axis is direction[f]):
+                                       // the edge vector in the opposite chart is R^r times the edge
+                                       // vector in face(h)'s chart up to a residual rotation:
+                                       // across ordinary edges r is the nearest quarter turn
+                                       // (residual <= 45deg); across feature edges r keeps both
+                                       // sides' isoline sectors (see edge_sector; residual <=
+                                       // 90deg). 0 on boundary halfedges;
+                                       // matching[opposite] = (4 - matching[h]) % 4.
+  std::vector<int> vertex_index;       // #V: singularity index in quarter turns (4 - valence of the
+                                       // quad-mesh vertex: +1 at a cube corner) = (angle defect -
+                                       // sum of the residual rotations left by the matchings
+                                       // around the vertex) / 90deg, an exact integer. Boundary
+                                       // vertices use the boundary version of Poincare-Hopf (2 -
+                                       // number of quads at the vertex: +1 at a 90deg corner):
+                                       // (pi - angle sum - residuals + how far the two boundary
+                                       // edges are off their isolines) / 90deg. Interior vertices:
+                                       // index = sum of the matchings around them, mod 4.
+  std::vector<char> feature_edge;      // #E: feature edges in use (caller + dihedral); boundaries
+                                       // are features too but are not flagged here
+  std::vector<char> constrained_face;  // #F: how the direction was fixed: 0 free (smoothest),
+                                       // 1 aligned to its one feature edge, 2 compromise of its
+                                       // two (three) feature edges, 3 compromise of an acute
+                                       // sector at one of its vertices (see above)
+  std::vector<int8_t> edge_sector;     // 3#F: for halfedges of feature and boundary edges, the
+                                       // isoline sector q: the halfedge vector runs along R^q(+u)
+                                       // of face(h)'s chart (q even: the edge runs along u, so v
+                                       // is constant on it; q odd: u is constant); the nearest
+                                       // axis in face(h) (off by at most 45deg; up to 90deg
+                                       // where a collapsed sector was resolved). Consistent
+                                       // across interior feature edges:
+                                       //   q(opposite) = (q(h) + matching[h] + 2) % 4.
+                                       // -1 on all other halfedges.
+  int num_overconstrained_faces = 0;   // faces with three feature/boundary edges: no triangle can
+                                       // have all three on isolines (the seamless map must give
+                                       // one up or the face must be split)
+  int num_collapsed_sectors = 0;       // sectors between consecutive feature/boundary edges around
+                                       // a vertex that map to no quarter turn (or, one face wide,
+                                       // not to exactly one): the seamless map must degenerate
+                                       // there. Only around over-constrained faces on the shared
+                                       // meshes (plus 2 on cow.obj at 40deg).
+  int num_resolved_sectors = 0;        // quarter turns moved into sectors that would have
+                                       // collapsed (or interior vertices of index > +1) from a
+                                       // neighbour: one matching (|residual| < 135deg) or one
+                                       // edge_sector (|rho| < 90deg) per move (see
+                                       // resolve_collapsed_sectors in cross_field.cpp)
+  int num_singularities = 0;           // vertices with vertex_index != 0
+  int index_sum = 0;                   // sum of vertex_index (quarter turns) = 4 * chi
+  int euler_characteristic = 0;        // of the mesh
 };
 
 // Feature edges (#E flags): the caller's plus those whose dihedral angle exceeds sharp_angle_deg

@@ -149,7 +149,8 @@ std::vector<char> primal_tree_edges(const TriMesh& mesh, const PrimalForest& for
 // Dual tree T* over the other interior edges: maximum spanning tree by the length of the loop
 // each edge would close, so that the left-over (handle loop) edges close short loops. Returns the
 // #E flags of the edges T* crosses; throws if the faces are not connected.
-std::vector<char> dual_tree_edges(const TriMesh& mesh, const std::vector<double>& dist, const std::vector<char>& in_tree) {
+std::vector<char> dual_tree_edges(const TriMesh& mesh, const std::vector<double>& dist,
+                                  const std::vector<char>& in_tree) {
   const int ne = mesh.num_edges(), nf = mesh.num_faces();
   std::vector<std::pair<double, int>> dual_edges;
   for (int e = 0; e < ne; ++e) {
@@ -166,9 +167,10 @@ std::vector<char> dual_tree_edges(const TriMesh& mesh, const std::vector<double>
     if (faces.unite(h / 3, mesh.opposite[h] / 3)) in_dual_tree[e] = 1, ++dual_tree_edges;
   }
   if (dual_tree_edges != nf - 1)
-    throw Error(ErrorCode::StageFailed, "cut graph: the faces are not connected across interior edges "
-                                        "(internal error: " + std::to_string(dual_tree_edges) + " dual tree edges for " +
-                                            std::to_string(nf) + " faces)");
+    throw Error(ErrorCode::StageFailed,
+                "cut graph: the faces are not connected across interior edges "
+                "(internal error: " +
+                    std::to_string(dual_tree_edges) + " dual tree edges for " + std::to_string(nf) + " faces)");
   return in_dual_tree;
 }
 

@@ -21,19 +21,19 @@
 namespace qgp {
 
 struct CutGraph {
-  std::vector<char> is_cut;          // #E: cut edges (boundary edges are never cuts)
-  std::vector<int8_t> rotation;      // 3#F: combed transition rotation of every halfedge
-                                     // (0 on non-cut edges), as Parametrization::rotation
-  std::vector<Vec3> frame_u;         // #F: combed unit tangent, the +u axis of each face's chart
-                                     // (+v = unit normal x frame_u); across non-cut edges the
-                                     // charts agree up to the field's residual rotation
-  std::vector<char> singular_vertex; // #V: vertex_index != 0 (boundary corners included)
-  std::vector<int8_t> frame_turns;   // #F: frame_u[f] = direction[f] turned by frame_turns[f]
-                                     // quarter turns counter-clockwise about the face normal
-  std::vector<int8_t> edge_sector;   // 3#F: CrossField::edge_sector in the combed charts: the
-                                     // feature/boundary halfedge runs along R^q(+u) of frame_u
-                                     // (q even: v constant along the edge; q odd: u constant);
-                                     // q(opposite) = (q(h) + rotation[h] + 2) % 4; -1 elsewhere
+  std::vector<char> is_cut;           // #E: cut edges (boundary edges are never cuts)
+  std::vector<int8_t> rotation;       // 3#F: combed transition rotation of every halfedge
+                                      // (0 on non-cut edges), as Parametrization::rotation
+  std::vector<Vec3> frame_u;          // #F: combed unit tangent, the +u axis of each face's chart
+                                      // (+v = unit normal x frame_u); across non-cut edges the
+                                      // charts agree up to the field's residual rotation
+  std::vector<char> singular_vertex;  // #V: vertex_index != 0 (boundary corners included)
+  std::vector<int8_t> frame_turns;    // #F: frame_u[f] = direction[f] turned by frame_turns[f]
+                                      // quarter turns counter-clockwise about the face normal
+  std::vector<int8_t> edge_sector;    // 3#F: CrossField::edge_sector in the combed charts: the
+                                      // feature/boundary halfedge runs along R^q(+u) of frame_u
+                                      // (q even: v constant along the edge; q odd: u constant);
+                                      // q(opposite) = (q(h) + rotation[h] + 2) % 4; -1 elsewhere
   int num_cut_edges = 0;
 };
 

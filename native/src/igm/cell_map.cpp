@@ -74,8 +74,9 @@ class RefinedPoints {
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)
         if (mesh_.F(f, k) == mesh_.F(other, j) && (best < 0 || b[k] > b[best])) best = k;
-    if (best < 0) fail("a trace jumps between faces " + std::to_string(f) + " and " + std::to_string(other) +
-                       ", which do not touch");
+    if (best < 0)
+      fail("a trace jumps between faces " + std::to_string(f) + " and " + std::to_string(other) +
+           ", which do not touch");
     return mesh_.F(f, best);
   }
 
@@ -83,7 +84,8 @@ class RefinedPoints {
   std::vector<std::pair<double, int>> along(int h) const {
     const int e = mesh_.edge_of[h];
     std::vector<std::pair<double, int>> list;
-    for (const auto& [lambda, id] : on_edge_[e]) list.push_back({mesh_.edge_halfedge[e] == h ? lambda : 1 - lambda, id});
+    for (const auto& [lambda, id] : on_edge_[e])
+      list.push_back({mesh_.edge_halfedge[e] == h ? lambda : 1 - lambda, id});
     std::sort(list.begin(), list.end());
     return list;
   }
@@ -129,9 +131,9 @@ using PointPair = std::pair<int, int>;
 PointPair key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
 
 struct Insertion {
-  std::vector<int> node_point;                             // #nodes: the refined point of each node
-  std::vector<std::vector<Piece>> pieces;                  // #F
-  std::vector<std::vector<std::pair<int, double>>> arcs;   // per point: (T-edge, fraction from its `from`)
+  std::vector<int> node_point;                            // #nodes: the refined point of each node
+  std::vector<std::vector<Piece>> pieces;                 // #F
+  std::vector<std::vector<std::pair<int, double>>> arcs;  // per point: (T-edge, fraction from its `from`)
   std::map<PointPair, ArcPiece> arc_pieces;
 };
 
@@ -201,10 +203,12 @@ FaceGraph face_points(const TriMesh& mesh, int f, const RefinedPoints& points) {
     g.gid.push_back(mesh.F(f, k)), g.xy.push_back(corner[k]), g.side_mask.push_back(1 << k | 1 << (k + 2) % 3);
     for (const auto& [mu, id] : points.along(3 * f + k)) {
       g.cycle.push_back(g.size());
-      g.gid.push_back(id), g.xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]), g.side_mask.push_back(1 << k);
+      g.gid.push_back(id), g.xy.push_back((1 - mu) * corner[k] + mu * corner[(k + 1) % 3]),
+          g.side_mask.push_back(1 << k);
     }
   }
-  for (const auto& [b, id] : points.inside(f)) g.gid.push_back(id), g.xy.push_back({b[1], b[2]}), g.side_mask.push_back(0);
+  for (const auto& [b, id] : points.inside(f))
+    g.gid.push_back(id), g.xy.push_back({b[1], b[2]}), g.side_mask.push_back(0);
   return g;
 }
 
@@ -219,7 +223,8 @@ void connect_pieces(int f, Insertion& ins, FaceGraph& g) {
   auto mark_arc = [&](int a, int b, int edge, int from) {
     auto [it, added] = ins.arc_pieces.emplace(key(a, b), ArcPiece{edge, from});
     if (!added && it->second.edge != edge)
-      fail("T-edges " + std::to_string(edge) + " and " + std::to_string(it->second.edge) + " overlap in face " + std::to_string(f));
+      fail("T-edges " + std::to_string(edge) + " and " + std::to_string(it->second.edge) + " overlap in face " +
+           std::to_string(f));
   };
   const std::vector<int>& cycle = g.cycle;
   g.adjacent.assign(g.size(), {});
@@ -307,8 +312,8 @@ void triangulate_region(int f, const FaceGraph& g, const std::vector<int>& polyg
 
 // Face f of the working mesh cut by its pieces into convex regions, each split into triangles
 // around its centroid; appends them (refined point ids) to `triangles`.
-void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins, std::vector<std::array<int, 3>>& triangles,
-                std::vector<int>& source_face) {
+void split_face(const TriMesh& mesh, int f, RefinedPoints& points, Insertion& ins,
+                std::vector<std::array<int, 3>>& triangles, std::vector<int>& source_face) {
   FaceGraph g = face_points(mesh, f, points);
   if (g.gid.size() == 3 && ins.pieces[f].empty()) {
     triangles.push_back({mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)});
@@ -340,8 +345,8 @@ struct CellFrame {
   };
   std::vector<Along> edges;
   int64_t width = 0, height = 0;
-  int rotation = 0;                    // into the glued uv layout
-  Vec2 translation{0, 0};   // integer
+  int rotation = 0;        // into the glued uv layout
+  Vec2 translation{0, 0};  // integer
 
   const Along* find(int edge) const {
     for (const Along& a : edges)
@@ -367,7 +372,8 @@ std::vector<CellFrame> cell_frames(const TMesh& tmesh, const std::vector<int64_t
     for (int s = 0; s < 4; ++s)
       for (int e : cell.sides[s]) {
         const auto& cells = tmesh.edges[e].cells;
-        if (cells[0] == cells[1]) fail("cell " + std::to_string(c) + " borders itself along T-edge " + std::to_string(e));
+        if (cells[0] == cells[1])
+          fail("cell " + std::to_string(c) + " borders itself along T-edge " + std::to_string(e));
         frames[c].edges.push_back({e, s, length[s], cells[0] == static_cast<int>(c)});
         length[s] += x[e];
       }
@@ -443,8 +449,8 @@ std::vector<std::pair<int, double>> tutte_weights(const TriMesh& mesh, int v, bo
 // scatters them by 1e-16 and flips some triangles. Such inner vertices are put exactly where they
 // belong: onto the side's coordinate when every neighbour is on it (within 1e-9), or onto the
 // collapsed point when all their boundary neighbours sit there and their star is a segment.
-void snap_degenerate_stars(const TriMesh& mesh, const std::vector<int>& inner,
-                           const std::vector<Vec2>& boundary_uv, std::vector<Vec2>& at) {
+void snap_degenerate_stars(const TriMesh& mesh, const std::vector<int>& inner, const std::vector<Vec2>& boundary_uv,
+                           std::vector<Vec2>& at) {
   constexpr double kTolerance = 1e-9;
   for (int sweep = 0, changed = 1; changed && sweep < 64; ++sweep) {
     changed = 0;
@@ -553,7 +559,8 @@ void check_cell_map_inputs(const TriMesh& mesh, const TMesh& tmesh, const std::v
   for (const TMeshCell& cell : tmesh.cells)
     for (const auto& side : cell.sides)
       for (int e : side)
-        if (e < 0 || e >= static_cast<int>(tmesh.edges.size())) invalid("a cell side names a T-edge that does not exist");
+        if (e < 0 || e >= static_cast<int>(tmesh.edges.size()))
+          invalid("a cell side names a T-edge that does not exist");
   for (int64_t length : x)
     if (length < 0) invalid("a T-edge length is negative");
 }
@@ -628,7 +635,8 @@ void CellMapper::insert_traces_into_mesh() {
   }
   TriMesh& refined = map_.mesh;
   refined.V.resize(static_cast<int>(points_.position.size()), 3);
-  for (size_t v = 0; v < points_.position.size(); ++v) refined.V.row(static_cast<int>(v)) = points_.position[v].transpose();
+  for (size_t v = 0; v < points_.position.size(); ++v)
+    refined.V.row(static_cast<int>(v)) = points_.position[v].transpose();
   refined.F.resize(static_cast<int>(triangles.size()), 3);
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) refined.F(static_cast<int>(t), k) = triangles[t][k];
@@ -665,7 +673,8 @@ void CellMapper::find_cells() {
   for (int t = 0; t < nf; ++t) {
     const int r = regions.find(t), cell = region_cell[r];
     if (cell < 0) fail("a region of the surface touches no trace");
-    if (cell_region[cell] >= 0 && cell_region[cell] != r) fail("cell " + std::to_string(cell) + " falls apart into two regions");
+    if (cell_region[cell] >= 0 && cell_region[cell] != r)
+      fail("cell " + std::to_string(cell) + " falls apart into two regions");
     cell_region[cell] = r;
     map_.face_cell[t] = cell;
   }
@@ -828,8 +837,10 @@ void CellMapper::open_degenerate_triangles(const std::vector<int>& cone_turns) {
     const auto it = ins_.arc_pieces.find(key(refined.from(h), refined.to(h)));
     if (it == ins_.arc_pieces.end() || !tmesh_.edges[it->second.edge].on_feature) continue;
     const IVec2 &a = map_.param.uv[h], &b = map_.param.uv[TriMesh::next(h)];
-    if (a[0] == b[0]) isolines.push_back({h, 0});
-    else if (a[1] == b[1]) isolines.push_back({h, 1});
+    if (a[0] == b[0])
+      isolines.push_back({h, 0});
+    else if (a[1] == b[1])
+      isolines.push_back({h, 1});
   }
   MapUntangleOptions untangle;
   untangle.never_flip = true;
@@ -844,7 +855,8 @@ void CellMapper::open_degenerate_triangles(const std::vector<int>& cone_turns) {
 void CellMapper::count_triangles() {
   for (int t = 0; t < map_.mesh.num_faces(); ++t) {
     for (int k = 0; k < 3; ++k)
-      map_.corner_uv[3 * t + k] = Vec2(map_.param.to_double(map_.param.uv[3 * t + k][0]), map_.param.to_double(map_.param.uv[3 * t + k][1]));
+      map_.corner_uv[3 * t + k] =
+          Vec2(map_.param.to_double(map_.param.uv[3 * t + k][0]), map_.param.to_double(map_.param.uv[3 * t + k][1]));
     const int sign = orient2d_exact(map_.param.uv[3 * t], map_.param.uv[3 * t + 1], map_.param.uv[3 * t + 2]);
     map_.stats.flipped_triangles += sign < 0;
     map_.stats.degenerate_triangles += sign == 0;
@@ -862,7 +874,8 @@ void CellMapper::count_wound_vertices(const std::vector<int>& cone_turns) {
   for (int t = 0; t < refined.num_faces(); ++t)
     if (orient2d_exact(map_.param.uv[3 * t], map_.param.uv[3 * t + 1], map_.param.uv[3 * t + 2]) <= 0)
       for (int k = 0; k < 3; ++k) positive[refined.F(t, k)] = 0;
-  for (int v = 0; v < refined.num_vertices(); ++v) map_.stats.wound_vertices += positive[v] && turns[v] != cone_turns[v];
+  for (int v = 0; v < refined.num_vertices(); ++v)
+    map_.stats.wound_vertices += positive[v] && turns[v] != cone_turns[v];
 }
 
 }  // namespace
@@ -875,6 +888,5 @@ CellMap map_cells_to_rectangles(const TriMesh& mesh, const TMesh& tmesh, const s
   map.stats.seconds = timer.seconds();
   return map;
 }
-
 
 }  // namespace qgp

@@ -19,24 +19,24 @@
 namespace qgp {
 
 struct CellMapStats {
-  int vertices = 0, faces = 0;     // of the refined mesh
-  int inner_vertices = 0;          // placed by the Tutte embedding
+  int vertices = 0, faces = 0;        // of the refined mesh
+  int inner_vertices = 0;             // placed by the Tutte embedding
   int degenerate_before_opening = 0;  // degenerate triangles of the Tutte embedding (made exact)
   int flipped_before_opening = 0;     // flipped by rounding onto the exact grid
   int opened_vertices = 0;            // moved by the opening step
   int wound_vertices = 0;             // all triangles positive, angle sum not the cone's (0 expected)
-  int flipped_triangles = 0;       // signed uv area < 0 (floating point)
-  int degenerate_triangles = 0;    // signed uv area == 0 (collapsed cells, chords along a side)
-  int collapsed_cell_triangles = 0;  // of them, in cells of zero width or height
+  int flipped_triangles = 0;          // signed uv area < 0 (floating point)
+  int degenerate_triangles = 0;       // signed uv area == 0 (collapsed cells, chords along a side)
+  int collapsed_cell_triangles = 0;   // of them, in cells of zero width or height
   double seconds = 0;
 };
 
 struct CellMap {
-  TriMesh mesh;                    // the working mesh with the traces inserted (connectivity built)
-  ExactParametrization param;      // the map, exact (fraction_bits of CellMapOptions)
-  std::vector<int> source_face;    // #F: the working-mesh face each triangle lies in
-  std::vector<int> face_cell;      // #F: the T-mesh cell each triangle lies in
-  std::vector<Vec2> corner_uv;     // 3#F: integer-grid coordinates of the corners (param as doubles)
+  TriMesh mesh;                  // the working mesh with the traces inserted (connectivity built)
+  ExactParametrization param;    // the map, exact (fraction_bits of CellMapOptions)
+  std::vector<int> source_face;  // #F: the working-mesh face each triangle lies in
+  std::vector<int> face_cell;    // #F: the T-mesh cell each triangle lies in
+  std::vector<Vec2> corner_uv;   // 3#F: integer-grid coordinates of the corners (param as doubles)
   CellMapStats stats;
 };
 

@@ -249,7 +249,8 @@ std::vector<IgmRow> path_rows(const TriMesh& mesh, const ExactParametrization& e
   }
   std::vector<Vec2> direction(ne);
   for (int e = 0; e < ne; ++e) {
-    if (tmesh.edges[e].trace.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: T-edge without a trace");
+    if (tmesh.edges[e].trace.empty())
+      throw Error(ErrorCode::InvalidArgument, "integer-grid map: T-edge without a trace");
     direction[e] = edge_direction(mesh, ex, tmesh.edges[e]);
   }
   // BFS tree: parent edge of each node.
@@ -353,7 +354,8 @@ void count_exact_irregular(const ExactParametrization& param, int* flipped, int*
   }
 }
 
-int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& cone_turns) {
+int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param,
+                                const std::vector<int>& cone_turns) {
   const std::vector<int> turns = exact_angle_sums(mesh, param);
   int defects = 0;
   for (int v = 0; v < mesh.num_vertices(); ++v) defects += turns[v] != cone_turns[v];
@@ -385,7 +387,8 @@ bool check_inputs(const TriMesh& mesh, const CrossField& field, const CutGraph& 
                                                 std::to_string(quantization.x.size()) + " lengths, " +
                                                 std::to_string(tmesh.edges.size()) + " edges)");
   if (!quantization.valid)
-    throw Error(ErrorCode::InvalidArgument, "integer-grid map: the quantization is invalid: " + quantization.invalid_reason);
+    throw Error(ErrorCode::InvalidArgument,
+                "integer-grid map: the quantization is invalid: " + quantization.invalid_reason);
   if (!(quantization.scale > 0) || !(options.edge_length > 0))
     throw Error(ErrorCode::InvalidArgument, "integer-grid map: scale and edge length must be positive");
   if (tmesh.nodes.empty()) throw Error(ErrorCode::InvalidArgument, "integer-grid map: empty T-mesh");
@@ -404,7 +407,8 @@ bool check_inputs(const TriMesh& mesh, const CrossField& field, const CutGraph& 
     throw Error(ErrorCode::InvalidArgument, "integer-grid map: the seamless map's cut flags do not match the mesh");
   for (int h = 0; h < nc; ++h)
     if (sanitized.rotation[h] != seamless.param.rotation[h])
-      throw Error(ErrorCode::InvalidArgument, "integer-grid map: the sanitized and the seamless map have different transitions");
+      throw Error(ErrorCode::InvalidArgument,
+                  "integer-grid map: the sanitized and the seamless map have different transitions");
   return true;
 }
 
@@ -431,10 +435,16 @@ IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField
                                            const SeamlessMap& seamless, const ExactParametrization& sanitized,
                                            const TMesh& tmesh, const QuantizationResult& quantization,
                                            const IgmOptions& options, Progress& progress)
-    : mesh_(mesh), field_(field), tmesh_(tmesh), options_(options), progress_(progress),
+    : mesh_(mesh),
+      field_(field),
+      tmesh_(tmesh),
+      options_(options),
+      progress_(progress),
       inputs_checked_(check_inputs(mesh, field, cut, seamless, sanitized, tmesh, quantization, options)),
-      problem_(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u, options.edge_length / quantization.scale),
-      scale_(quantization.scale), cones_(cone_quarter_turns(mesh, field)) {
+      problem_(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
+               options.edge_length / quantization.scale),
+      scale_(quantization.scale),
+      cones_(cone_quarter_turns(mesh, field)) {
   add_seamless_isolines(seamless, cut);
   build_path_rows(sanitized, quantization);
   problem_.set_pin_translation(false);
@@ -456,13 +466,15 @@ void IntegerGridMapSolver::add_seamless_isolines(const SeamlessMap& seamless, co
     if (!left_free[mesh_.edge_of[line.halfedge]]) problem_.add_isoline(line.halfedge, line.axis);
 }
 
-void IntegerGridMapSolver::build_path_rows(const ExactParametrization& sanitized, const QuantizationResult& quantization) {
+void IntegerGridMapSolver::build_path_rows(const ExactParametrization& sanitized,
+                                           const QuantizationResult& quantization) {
   root_ = root_node(tmesh_);
   std::vector<double> lengths(quantization.x.begin(), quantization.x.end());
   rows_ = path_rows(mesh_, sanitized, tmesh_, lengths, root_, progress_);
   for (const IgmRow& r : rows_)
     if (r.terms.empty() && std::abs(r.rhs) > 0)
-      throw Error(ErrorCode::StageFailed, "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
+      throw Error(ErrorCode::StageFailed,
+                  "integer-grid map: a loop of the T-mesh without transition has a non-zero length");
 }
 
 void IntegerGridMapSolver::add_path_constraints() {
@@ -472,7 +484,8 @@ void IntegerGridMapSolver::add_path_constraints() {
     if (!r.terms.empty()) problem_.add_linear_constraint(r.terms, r.rhs), ++count;
   const SurfacePoint& root_point = tmesh_.nodes[root_].point;
   const PointExpr e = surface_point_expr(root_point);
-  for (int a = 0; a < 2; ++a) problem_.add_linear_constraint(e.terms[a], std::round(scale_ * root_point.uv[a])), ++count;
+  for (int a = 0; a < 2; ++a)
+    problem_.add_linear_constraint(e.terms[a], std::round(scale_ * root_point.uv[a])), ++count;
   stats_.constraints = count;
 }
 
@@ -636,6 +649,5 @@ IntegerGridMap IntegerGridMapSolver::solve(IgmAttempt attempt, double progress_b
   result.stats = stats_;
   return result;
 }
-
 
 }  // namespace qgp

@@ -35,13 +35,13 @@
 namespace qgp {
 
 struct IgmOptions {
-  double edge_length = 1;        // model units per uv unit of the seamless map (SeamlessMapOptions)
-  double penalty_weight = 1e6;   // λ of the penalty phase
+  double edge_length = 1;           // model units per uv unit of the seamless map (SeamlessMapOptions)
+  double penalty_weight = 1e6;      // λ of the penalty phase
   double penalty_tolerance = 1e-4;  // stop the penalty phase at ‖Cz − b‖∞ ≤ this (quad units)
-  int max_penalty_rounds = 8;    // penalty solves of the re-linearized attempt
-  int max_repair_rounds = 24;    // Ipopt repair rounds per solve
-  int relinearization_rounds = 1;  // extra re-linearizations inside each solve once regular
-  int fraction_bits = 20;        // of the exact result
+  int max_penalty_rounds = 8;       // penalty solves of the re-linearized attempt
+  int max_repair_rounds = 24;       // Ipopt repair rounds per solve
+  int relinearization_rounds = 1;   // extra re-linearizations inside each solve once regular
+  int fraction_bits = 20;           // of the exact result
 };
 
 // What one solve of the integer-grid map does (paper §7.1).
@@ -61,24 +61,24 @@ enum class IgmAttempt {
 const char* igm_attempt_name(IgmAttempt attempt);
 
 struct IgmStats {
-  int flipped_triangles = 0;        // in the exact result (exact sign)
-  int degenerate_triangles = 0;     // in the exact result
+  int flipped_triangles = 0;                                        // in the exact result (exact sign)
+  int degenerate_triangles = 0;                                     // in the exact result
   int flipped_before_untangle = 0, degenerate_before_untangle = 0;  // set by the caller's untangle
-  int untangled_vertices = 0;       // (untangle_map) of the solve's exact result
-  int winding_defects = 0;          // vertices whose angle sum differs from their cone angle (a
-                                    // flip-free map can wind a one-ring twice)
-  double max_integer_residual = 0;  // before snapping: largest distance of a singular vertex /
-                                    // transition translation / feature isoline from an integer
-  double penalty_integer_residual = 0;  // the same after the penalty phase (<= 1e-4 expected)
-  double max_constraint_violation = 0;  // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
+  int untangled_vertices = 0;                                       // (untangle_map) of the solve's exact result
+  int winding_defects = 0;                   // vertices whose angle sum differs from their cone angle (a
+                                             // flip-free map can wind a one-ring twice)
+  double max_integer_residual = 0;           // before snapping: largest distance of a singular vertex /
+                                             // transition translation / feature isoline from an integer
+  double penalty_integer_residual = 0;       // the same after the penalty phase (<= 1e-4 expected)
+  double max_constraint_violation = 0;       // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
   IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
-  bool fallback_used = false;       // made by the all-faces attempt
-  std::string path;                 // the policy's account of the attempts (pipeline/policy.h)
-  int penalty_iterations = 0;       // penalty solves run (all attempts so far)
-  std::vector<double> penalty_violation;  // ‖Cz − b‖∞ after each penalty solve
-  int constraints = 0;              // scalar rows of C
-  int unresolved_equations = 0;     // of the sanitization (0 expected)
-  int64_t parametric_area = 0;      // Σ triangle areas in uv, in quad units (== quads_expected)
+  bool fallback_used = false;                // made by the all-faces attempt
+  std::string path;                          // the policy's account of the attempts (pipeline/policy.h)
+  int penalty_iterations = 0;                // penalty solves run (all attempts so far)
+  std::vector<double> penalty_violation;     // ‖Cz − b‖∞ after each penalty solve
+  int constraints = 0;                       // scalar rows of C
+  int unresolved_equations = 0;              // of the sanitization (0 expected)
+  int64_t parametric_area = 0;               // Σ triangle areas in uv, in quad units (== quads_expected)
   bool area_is_integral = true;
   int ipopt_solves = 0, ipopt_iterations = 0;  // all attempts so far
   double seconds = 0, seconds_solve = 0, seconds_sanitize = 0;
@@ -88,7 +88,7 @@ struct IntegerGridMap {
   ExactParametrization param;  // exact integer-grid map (input of extract_quads)
   Parametrization continuous;  // the solved map before rounding (quad units)
   IgmStats stats;
-  std::vector<char> snapped_vertices;     // #V: held on integer points (singular, corners, seeds)
+  std::vector<char> snapped_vertices;       // #V: held on integer points (singular, corners, seeds)
   std::vector<IsolineConstraint> isolines;  // feature and boundary edges held on integer isolines
 };
 
@@ -117,8 +117,8 @@ std::vector<IgmRow> integer_grid_rows(const TriMesh& mesh, const ExactParametriz
 class IntegerGridMapSolver {
  public:
   IntegerGridMapSolver(const TriMesh& mesh, const CrossField& field, const CutGraph& cut, const SeamlessMap& seamless,
-                       const ExactParametrization& sanitized, const TMesh& tmesh, const QuantizationResult& quantization,
-                       const IgmOptions& options, Progress& progress);
+                       const ExactParametrization& sanitized, const TMesh& tmesh,
+                       const QuantizationResult& quantization, const IgmOptions& options, Progress& progress);
   ~IntegerGridMapSolver();
 
   // Runs one attempt and rounds its result exactly. The stats' effort counters (solves,
@@ -156,11 +156,11 @@ class IntegerGridMapSolver {
   bool inputs_checked_;
   ParametrizationProblem problem_;  // at the quantization's scale: 1 uv unit = one quad edge
   double scale_;
-  std::vector<int> cones_;          // cone angle of each vertex, in quarter turns
+  std::vector<int> cones_;  // cone angle of each vertex, in quarter turns
   int root_ = 0;
   std::vector<IgmRow> rows_;
-  Parametrization seamless_pose_;   // the seamless map at the quantization's scale
-  Parametrization pose_;            // linearization pose of the penalty phase
+  Parametrization seamless_pose_;  // the seamless map at the quantization's scale
+  Parametrization pose_;           // linearization pose of the penalty phase
   ParametrizationSolveOptions solve_options_;
   std::vector<char> snap_vertices_;
   std::vector<IsolineConstraint> isolines_;
@@ -169,13 +169,13 @@ class IntegerGridMapSolver {
   IgmStats stats_;
 };
 
-
 // Exact counts of flipped (area < 0) and degenerate (area == 0) triangles.
 void count_exact_irregular(const ExactParametrization& param, int* flipped, int* degenerate);
 
 // Vertices whose angle sum in the exact map, in quarter turns, is not cone_turns[v] (#V, e.g. the
 // cross field's cone_quarter_turns).
-int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param, const std::vector<int>& cone_turns);
+int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization& param,
+                                const std::vector<int>& cone_turns);
 // Sum of the signed triangle areas in uv (quad units), rounded toward zero; *integral tells
 // whether it is a whole number.
 int64_t exact_parametric_area(const ExactParametrization& param, bool* integral);

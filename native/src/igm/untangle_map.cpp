@@ -63,8 +63,13 @@ bool corner_turns(const TriMesh& mesh, const ExactParametrization& param, const 
 class MapUntangler {
  public:
   MapUntangler(const TriMesh& mesh, ExactParametrization& param, Progress& progress, const MapUntangleOptions& options)
-      : mesh_(mesh), param_(param), progress_(progress), options_(options), nv_(mesh.num_vertices()),
-        nf_(mesh.num_faces()), bad_(nf_, 0) {
+      : mesh_(mesh),
+        param_(param),
+        progress_(progress),
+        options_(options),
+        nv_(mesh.num_vertices()),
+        nf_(mesh.num_faces()),
+        bad_(nf_, 0) {
     count_bad(&stats_.flipped_before, &stats_.degenerate_before);
     stats_.flipped_after = stats_.flipped_before;
     stats_.degenerate_after = stats_.degenerate_before;
@@ -113,7 +118,7 @@ class MapUntangler {
   std::vector<char> dirty_;                // #V: something within two rings moved since it last failed
   std::vector<double> c_terms_, g_line_;   // scratch of best_direction
   std::vector<Vec2> g_terms_;
-  std::vector<IVec2> old_uv_;              // scratch of step_towards
+  std::vector<IVec2> old_uv_;  // scratch of step_towards
 };
 
 // Marks the flipped and degenerate triangles of the current map and counts them.
@@ -188,7 +193,8 @@ RingKey MapUntangler::ring_key(int v, const IVec2& d) const {
   bool first = true;
   for (int c : corners_[v]) {
     const int f = c / 3, k = c % 3;
-    const __int128 area = doubled_area(moved_corner(c, d), param_.uv[3 * f + (k + 1) % 3], param_.uv[3 * f + (k + 2) % 3]);
+    const __int128 area =
+        doubled_area(moved_corner(c, d), param_.uv[3 * f + (k + 1) % 3], param_.uv[3 * f + (k + 2) % 3]);
     key.bad += area <= 0;
     key.flipped += area < 0;
     if (first || area < key.smallest) key.smallest = area;
@@ -213,7 +219,8 @@ int MapUntangler::quarter_turns(int u) const {
 // Whether every triangle around u is positive.
 bool MapUntangler::ring_positive(int u) const {
   for (int c : corners_[u])
-    if (orient2d_exact(param_.uv[c], param_.uv[3 * (c / 3) + (c % 3 + 1) % 3], param_.uv[3 * (c / 3) + (c % 3 + 2) % 3]) <= 0)
+    if (orient2d_exact(param_.uv[c], param_.uv[3 * (c / 3) + (c % 3 + 1) % 3],
+                       param_.uv[3 * (c / 3) + (c % 3 + 2) % 3]) <= 0)
       return false;
   return true;
 }
@@ -284,7 +291,8 @@ bool MapUntangler::step_towards(int v, const Vec2& d, double scale) {
     for (size_t i = 0; i < ring.size() && cones_kept; ++i) {
       const int turns = quarter_turns(ring[i]);
       cones_kept = turns == turns_now[i] || injective_sum(ring[i], turns);
-      if (!options_.cone_turns.empty() && turns != options_.cone_turns[ring[i]] && ring_positive(ring[i])) cones_kept = false;
+      if (!options_.cone_turns.empty() && turns != options_.cone_turns[ring[i]] && ring_positive(ring[i]))
+        cones_kept = false;
     }
     if (cones_kept) {
       moved_[v] = 1;

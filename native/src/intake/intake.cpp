@@ -18,9 +18,8 @@ std::string point_text(const Vec3& p) {
 }
 
 // Drops the given edge-connected components, or refuses the mesh when dropping is not allowed.
-void drop_or_refuse(TriangleSoup& soup, const std::vector<int>& bad_components,
-                    const std::string& what, bool allow_drop, IntakeResult& result,
-                    const std::string& repair_kind) {
+void drop_or_refuse(TriangleSoup& soup, const std::vector<int>& bad_components, const std::string& what,
+                    bool allow_drop, IntakeResult& result, const std::string& repair_kind) {
   int num_components = 0;
   const std::vector<int> component = edge_connected_components(soup, &num_components);
   std::vector<char> bad(num_components, 0);
@@ -34,8 +33,7 @@ void drop_or_refuse(TriangleSoup& soup, const std::vector<int>& bad_components,
   result.repairs.push_back({repair_kind, static_cast<int>(bad_components.size())});
   result.warnings.push_back(what + "; " + std::to_string(bad_components.size()) +
                             " affected component(s) were dropped");
-  if (soup.triangles.empty())
-    throw Error(ErrorCode::InvalidMesh, what + "; no usable component is left");
+  if (soup.triangles.empty()) throw Error(ErrorCode::InvalidMesh, what + "; no usable component is left");
 }
 
 void classify_components(IntakeResult& result) {
@@ -119,8 +117,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
                    std::to_string(nonmanifold.size()) +
                        " non-manifold edge(s) (shared by more than two faces), the first between input vertices " +
                        std::to_string(soup.input_vertex[first[0]]) + " and " +
-                       std::to_string(soup.input_vertex[first[1]]) + " at " +
-                       point_text(soup.positions[first[0]]),
+                       std::to_string(soup.input_vertex[first[1]]) + " at " + point_text(soup.positions[first[0]]),
                    options.drop_bad_components, result, "dropped_nonmanifold_components");
   }
   progress.update(0.35);
@@ -128,8 +125,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
   std::vector<int> non_orientable;
   note("inconsistent_orientation", orient_consistently(soup, &non_orientable));
   if (!non_orientable.empty()) {
-    drop_or_refuse(soup, non_orientable,
-                   std::to_string(non_orientable.size()) + " non-orientable component(s)",
+    drop_or_refuse(soup, non_orientable, std::to_string(non_orientable.size()) + " non-orientable component(s)",
                    options.drop_bad_components, result, "dropped_nonorientable_components");
   }
   note("nonmanifold_vertices", split_nonmanifold_vertices(soup));
@@ -183,8 +179,8 @@ void to_json(Json& input, const IntakeResult& r) {
   input["warnings"] = r.warnings;
 }
 
-std::vector<char> map_input_edges(const IntakeResult& intake,
-                                  const std::vector<std::array<int, 2>>& input_pairs, int* unmatched) {
+std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<std::array<int, 2>>& input_pairs,
+                                  int* unmatched) {
   const TriMesh& mesh = intake.mesh;
   auto key = [](int a, int b) {
     return static_cast<uint64_t>(std::min(a, b)) << 32 | static_cast<uint32_t>(std::max(a, b));

@@ -38,11 +38,11 @@ struct ComponentInfo {
 };
 
 struct IntakeResult {
-  TriMesh mesh;                    // repaired, oriented, manifold; connectivity built
-  std::vector<int> input_vertex;   // per mesh vertex: its index in the input soup
-  std::vector<int> input_face;     // per mesh face: the input face (polygon) it came from
+  TriMesh mesh;                   // repaired, oriented, manifold; connectivity built
+  std::vector<int> input_vertex;  // per mesh vertex: its index in the input soup
+  std::vector<int> input_face;    // per mesh face: the input face (polygon) it came from
   std::vector<ComponentInfo> components;
-  std::vector<Repair> repairs;     // only repairs that happened (count > 0)
+  std::vector<Repair> repairs;  // only repairs that happened (count > 0)
   std::vector<std::string> warnings;
   int input_vertices = 0, input_faces = 0;
 };
@@ -55,8 +55,7 @@ void to_json(Json& j, const IntakeResult& result);
 
 // Marks the mesh edges whose endpoints are the given input vertex pairs. Pairs that match no
 // edge (not adjacent in the input, or removed by a repair) are counted in *unmatched.
-std::vector<char> map_input_edges(const IntakeResult& intake,
-                                  const std::vector<std::array<int, 2>>& input_pairs,
+std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<std::array<int, 2>>& input_pairs,
                                   int* unmatched);
 
 // One connected component as its own mesh (connectivity built). vertex_map / face_map (optional)

@@ -2,8 +2,8 @@
 
 namespace qgp {
 
-PolygonSoup soup_from_triangle_arrays(const double* vertices, long long num_vertices,
-                                      const int* triangles, long long num_triangles) {
+PolygonSoup soup_from_triangle_arrays(const double* vertices, long long num_vertices, const int* triangles,
+                                      long long num_triangles) {
   PolygonSoup soup;
   soup.positions.resize(static_cast<size_t>(num_vertices));
   for (long long i = 0; i < num_vertices; ++i)

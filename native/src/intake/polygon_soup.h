@@ -8,9 +8,9 @@
 namespace qgp {
 
 struct PolygonSoup {
-  std::vector<Vec3> positions;        // #V positions
-  std::vector<int> face_start{0};     // #faces+1 offsets into face_vertices
-  std::vector<int> face_vertices;     // vertex indices of all faces, concatenated
+  std::vector<Vec3> positions;     // #V positions
+  std::vector<int> face_start{0};  // #faces+1 offsets into face_vertices
+  std::vector<int> face_vertices;  // vertex indices of all faces, concatenated
 
   int num_vertices() const { return static_cast<int>(positions.size()); }
   int num_faces() const { return static_cast<int>(face_start.size()) - 1; }
@@ -22,7 +22,7 @@ struct PolygonSoup {
 };
 
 // Builds a soup of triangles from flat arrays: vertices (n x 3, row-major) and triangles (m x 3).
-PolygonSoup soup_from_triangle_arrays(const double* vertices, long long num_vertices,
-                                      const int* triangles, long long num_triangles);
+PolygonSoup soup_from_triangle_arrays(const double* vertices, long long num_vertices, const int* triangles,
+                                      long long num_triangles);
 
 }  // namespace qgp

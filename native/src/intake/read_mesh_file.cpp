@@ -134,11 +134,11 @@ PolygonSoup read_obj(const std::string& path, const std::string& text) {
         // Negative indices count back from the last vertex read so far.
         const long long resolved = index > 0 ? index - 1 : static_cast<long long>(soup.positions.size()) + index;
         if (resolved < 0 || resolved > INT32_MAX)
-          unreadable(path, at_line(lines.line_number()) + "vertex reference " + std::to_string(index) + " out of range");
+          unreadable(path,
+                     at_line(lines.line_number()) + "vertex reference " + std::to_string(index) + " out of range");
         face.push_back(static_cast<int>(resolved));
       }
-      if (face.size() < 3)
-        unreadable(path, at_line(lines.line_number()) + "a face needs at least three vertices");
+      if (face.size() < 3) unreadable(path, at_line(lines.line_number()) + "a face needs at least three vertices");
       soup.add_face(face.data(), static_cast<int>(face.size()));
     }
   }
@@ -160,8 +160,7 @@ PolygonSoup read_off(const std::string& path, const std::string& text) {
     }
     return false;
   };
-  if (!next_content(line) || !next_token(line, token) || token.size() < 3 ||
-      token.substr(token.size() - 3) != "OFF")
+  if (!next_content(line) || !next_token(line, token) || token.size() < 3 || token.substr(token.size() - 3) != "OFF")
     unreadable(path, "not an OFF file (no OFF header)");
   if (token.find("4") != std::string_view::npos || token.find("n") == 0)
     unreadable(path, "OFF variant '" + std::string(token) + "' (higher dimension) is not supported");
@@ -180,7 +179,8 @@ PolygonSoup read_off(const std::string& path, const std::string& text) {
                          " faces, more than the file holds (truncated?)");
   soup.positions.reserve(static_cast<size_t>(nv));
   for (long long v = 0; v < nv; ++v) {
-    if (!next_content(line)) unreadable(path, "file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
+    if (!next_content(line))
+      unreadable(path, "file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
     Vec3 p;
     for (int k = 0; k < 3; ++k)
       if (!next_token(line, token) || !parse_double(token, p[k]))
@@ -189,7 +189,8 @@ PolygonSoup read_off(const std::string& path, const std::string& text) {
   }
   std::vector<int> face;
   for (long long f = 0; f < nf; ++f) {
-    if (!next_content(line)) unreadable(path, "file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+    if (!next_content(line))
+      unreadable(path, "file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
     long long n = 0;
     if (!next_token(line, token) || !parse_long(token, n) || n < 3 || n > 100000)
       unreadable(path, at_line(lines.line_number()) + "bad face size");
@@ -249,11 +250,31 @@ class PlyData {
     if (swap_) std::reverse(b, b + n);
     if (type == "char" || type == "int8") return static_cast<int8_t>(b[0]);
     if (type == "uchar" || type == "uint8") return b[0];
-    if (type == "short" || type == "int16") { int16_t v; std::memcpy(&v, b, 2); return v; }
-    if (type == "ushort" || type == "uint16") { uint16_t v; std::memcpy(&v, b, 2); return v; }
-    if (type == "int" || type == "int32") { int32_t v; std::memcpy(&v, b, 4); return v; }
-    if (type == "uint" || type == "uint32") { uint32_t v; std::memcpy(&v, b, 4); return v; }
-    if (type == "float" || type == "float32") { float v; std::memcpy(&v, b, 4); return v; }
+    if (type == "short" || type == "int16") {
+      int16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    if (type == "ushort" || type == "uint16") {
+      uint16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    if (type == "int" || type == "int32") {
+      int32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    if (type == "uint" || type == "uint32") {
+      uint32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    if (type == "float" || type == "float32") {
+      float v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
     double v;
     std::memcpy(&v, b, 8);
     return v;
@@ -348,9 +369,12 @@ PolygonSoup read_ply(const std::string& path, const std::string& text) {
         if (!prop.is_list) {
           const double v = data.read(prop.type);
           if (is_vertex) {
-            if (prop.name == "x") p.x() = v;
-            else if (prop.name == "y") p.y() = v;
-            else if (prop.name == "z") p.z() = v;
+            if (prop.name == "x")
+              p.x() = v;
+            else if (prop.name == "y")
+              p.y() = v;
+            else if (prop.name == "z")
+              p.z() = v;
           }
           continue;
         }

@@ -78,8 +78,8 @@ void triangulate_polygon(const PolygonSoup& soup, int f, const std::unordered_se
   for (int i = 0; i < n; ++i) {
     const Vec3& p = soup.positions[idx[i]];
     const Vec3& q = soup.positions[idx[(i + 1) % n]];
-    normal += Vec3((p.y() - q.y()) * (p.z() + q.z()), (p.z() - q.z()) * (p.x() + q.x()),
-                   (p.x() - q.x()) * (p.y() + q.y()));
+    normal +=
+        Vec3((p.y() - q.y()) * (p.z() + q.z()), (p.z() - q.z()) * (p.x() + q.x()), (p.x() - q.x()) * (p.y() + q.y()));
   }
   auto fan = [&] {
     for (int i = 1; i + 1 < n; ++i) out.push_back({idx[0], idx[i], idx[i + 1]});
@@ -187,8 +187,9 @@ class ZeroAreaRepair {
     const double area = triangle_area(soup_, t);
     double longest2 = 0;
     for (int k = 0; k < 3; ++k)
-      longest2 = std::max(longest2, (soup_.positions[soup_.triangles[t][(k + 1) % 3]] -
-                                     soup_.positions[soup_.triangles[t][k]]).squaredNorm());
+      longest2 = std::max(
+          longest2,
+          (soup_.positions[soup_.triangles[t][(k + 1) % 3]] - soup_.positions[soup_.triangles[t][k]]).squaredNorm());
     return area <= zero_area_ * diag2_ || 2 * area <= flatness_ * longest2;
   }
 
@@ -233,12 +234,10 @@ class ZeroAreaRepair {
     const auto tri = soup_.triangles[t];
     if (locked_[tri[0]] || locked_[tri[1]] || locked_[tri[2]]) return false;
     double len[3];
-    for (int k = 0; k < 3; ++k)
-      len[k] = (soup_.positions[tri[(k + 1) % 3]] - soup_.positions[tri[k]]).norm();
+    for (int k = 0; k < 3; ++k) len[k] = (soup_.positions[tri[(k + 1) % 3]] - soup_.positions[tri[k]]).norm();
     const int shortest = static_cast<int>(std::min_element(len, len + 3) - len);
     const int longest = static_cast<int>(std::max_element(len, len + 3) - len);
-    const bool needle = len[shortest] <= 1e-3 * len[longest] ||
-                        triangle_area(soup_, t) <= zero_area_ * diag2_;
+    const bool needle = len[shortest] <= 1e-3 * len[longest] || triangle_area(soup_, t) <= zero_area_ * diag2_;
     return needle ? (try_collapse(tri, shortest) || try_flip(t, tri, longest))
                   : (try_flip(t, tri, longest) || try_collapse(tri, shortest));
   }
@@ -302,8 +301,8 @@ void validate_soup(const PolygonSoup& soup) {
   if (soup.num_faces() <= 0) throw Error(ErrorCode::InvalidMesh, "the mesh has no faces");
   for (int v = 0; v < soup.num_vertices(); ++v)
     if (!soup.positions[v].allFinite())
-      throw Error(ErrorCode::InvalidMesh, "vertex " + std::to_string(v) +
-                                              " has a non-finite coordinate (NaN or infinity)");
+      throw Error(ErrorCode::InvalidMesh,
+                  "vertex " + std::to_string(v) + " has a non-finite coordinate (NaN or infinity)");
   const int nv = soup.num_vertices();
   for (int f = 0; f < soup.num_faces(); ++f) {
     const int n = soup.face_size(f);
@@ -314,13 +313,12 @@ void validate_soup(const PolygonSoup& soup) {
     for (int i = 0; i < n; ++i) {
       if (idx[i] < 0 || idx[i] >= nv)
         throw Error(ErrorCode::InvalidMesh, "face " + std::to_string(f) + " refers to vertex " +
-                                                std::to_string(idx[i]) + ", but the mesh has " +
-                                                std::to_string(nv) + " vertices");
+                                                std::to_string(idx[i]) + ", but the mesh has " + std::to_string(nv) +
+                                                " vertices");
       for (int j = 0; j < i; ++j)
         if (idx[i] == idx[j])
           throw Error(ErrorCode::InvalidMesh, "face " + std::to_string(f) + " repeats vertex " +
-                                                  std::to_string(idx[i]) +
-                                                  " (a face needs distinct vertices)");
+                                                  std::to_string(idx[i]) + " (a face needs distinct vertices)");
     }
   }
 }

@@ -122,7 +122,8 @@ WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feat
   int carried = 0;
   for (int e = 0; e < result.mesh.num_edges(); ++e) {
     const int h = result.mesh.edge_halfedge[e];
-    const auto key = std::minmax(result.vertex_of_input[result.mesh.from(h)], result.vertex_of_input[result.mesh.to(h)]);
+    const auto key =
+        std::minmax(result.vertex_of_input[result.mesh.from(h)], result.vertex_of_input[result.mesh.to(h)]);
     if (input_edge.count(key)) {
       result.feature_edges[e] = 1;
       ++carried;

@@ -15,10 +15,10 @@
 namespace qgp {
 
 struct WorkingMesh {
-  TriMesh mesh;                     // connectivity built
-  std::vector<int> vertex_of_input; // #V of mesh: its vertex index in the input mesh
-  std::vector<char> feature_edges;  // #E of mesh: the input's feature edges, carried over
-  bool decimated = false;           // false: mesh is a copy of the input
+  TriMesh mesh;                      // connectivity built
+  std::vector<int> vertex_of_input;  // #V of mesh: its vertex index in the input mesh
+  std::vector<char> feature_edges;   // #E of mesh: the input's feature edges, carried over
+  bool decimated = false;            // false: mesh is a copy of the input
 };
 
 // Face budget of the working mesh for about `target_quads` quads on this component: a fixed

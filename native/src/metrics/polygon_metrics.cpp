@@ -101,7 +101,8 @@ PolygonMeshMetrics measure_polygon_mesh(const PolygonSoup& mesh, const TriMesh& 
     std::vector<std::array<int, 3>> rt(reference.num_faces());
     for (int f = 0; f < reference.num_faces(); ++f) rt[f] = {reference.F(f, 0), reference.F(f, 1), reference.F(f, 2)};
     const TriangleBvh reference_bvh(reference), mesh_bvh(quads.V, triangles);
-    m.quad.hausdorff_quads_to_mesh = max_distance(sample_surface(mesh.positions, triangles, 100000, rng), reference_bvh, progress) / diag;
+    m.quad.hausdorff_quads_to_mesh =
+        max_distance(sample_surface(mesh.positions, triangles, 100000, rng), reference_bvh, progress) / diag;
     m.quad.hausdorff_mesh_to_quads = max_distance(sample_surface(rv, rt, 100000, rng), mesh_bvh, progress) / diag;
     m.quad.hausdorff = std::max(m.quad.hausdorff_quads_to_mesh, m.quad.hausdorff_mesh_to_quads);
   }

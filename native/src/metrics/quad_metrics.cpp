@@ -68,8 +68,10 @@ QuadTopology quad_topology(const QuadMesh& quads) {
       ++t.unreferenced_vertices;
       continue;
     }
-    if (t.on_boundary[v]) t.irregular_boundary += t.valence[v] != 3;
-    else t.irregular_interior += t.valence[v] != 4;
+    if (t.on_boundary[v])
+      t.irregular_boundary += t.valence[v] != 3;
+    else
+      t.irregular_interior += t.valence[v] != 4;
   }
   t.euler_characteristic = t.vertices - t.edges + t.faces;
   return t;
@@ -100,8 +102,8 @@ std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<s
   if (T.empty() || !(total > 0)) return samples;
   std::uniform_real_distribution<double> uniform(0, 1);
   for (int i = 0; i < count; ++i) {
-    const size_t t = std::min(T.size() - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform(rng) * total) -
-                                                   cdf.begin()));
+    const size_t t =
+        std::min(T.size() - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform(rng) * total) - cdf.begin()));
     double r1 = uniform(rng), r2 = uniform(rng);
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
     samples.push_back(V[T[t][0]] + r1 * (V[T[t][1]] - V[T[t][0]]) + r2 * (V[T[t][2]] - V[T[t][0]]));
@@ -190,10 +192,10 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
     const TriangleBvh quad_bvh(quads.V, qt);
     const double diagonal = reference.bounding_box_diagonal();
     const double scale = diagonal > 0 ? 1 / diagonal : 1;
-    m.hausdorff_quads_to_mesh = scale * max_distance(sample_surface(qv, qt, options.hausdorff_samples, rng),
-                                                     reference_bvh, progress);
-    m.hausdorff_mesh_to_quads = scale * max_distance(sample_surface(rv, rt, options.hausdorff_samples, rng),
-                                                     quad_bvh, progress);
+    m.hausdorff_quads_to_mesh =
+        scale * max_distance(sample_surface(qv, qt, options.hausdorff_samples, rng), reference_bvh, progress);
+    m.hausdorff_mesh_to_quads =
+        scale * max_distance(sample_surface(rv, rt, options.hausdorff_samples, rng), quad_bvh, progress);
     m.hausdorff = std::max(m.hausdorff_quads_to_mesh, m.hausdorff_mesh_to_quads);
   }
   return m;

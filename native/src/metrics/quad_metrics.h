@@ -18,16 +18,16 @@ namespace qgp {
 
 struct QuadTopology {
   int vertices = 0, edges = 0, faces = 0;
-  int boundary_edges = 0;        // edges with one quad
-  int non_manifold_edges = 0;    // edges with more than two quads
-  int inconsistent_edges = 0;    // edges two quads traverse in the same direction
-  int degenerate_quads = 0;      // quads repeating a vertex
+  int boundary_edges = 0;      // edges with one quad
+  int non_manifold_edges = 0;  // edges with more than two quads
+  int inconsistent_edges = 0;  // edges two quads traverse in the same direction
+  int degenerate_quads = 0;    // quads repeating a vertex
   int unreferenced_vertices = 0;
-  int euler_characteristic = 0;  // V - E + F
-  std::vector<int> valence;      // #V: number of edges at each vertex
-  std::vector<char> on_boundary; // #V: touches a boundary edge
-  int irregular_interior = 0;    // interior vertices of valence != 4
-  int irregular_boundary = 0;    // boundary vertices of valence != 3
+  int euler_characteristic = 0;   // V - E + F
+  std::vector<int> valence;       // #V: number of edges at each vertex
+  std::vector<char> on_boundary;  // #V: touches a boundary edge
+  int irregular_interior = 0;     // interior vertices of valence != 4
+  int irregular_boundary = 0;     // boundary vertices of valence != 3
 };
 
 QuadTopology quad_topology(const QuadMesh& quads);
@@ -37,22 +37,22 @@ QuadTopology quad_topology(const QuadMesh& quads);
 std::vector<char> non_manifold_quads(const QuadMesh& quads);
 
 struct QuadMetricsOptions {
-  bool hausdorff = true;          // sample the two-sided Hausdorff distance
-  int hausdorff_samples = 100000; // random surface samples per direction (plus all vertices)
+  bool hausdorff = true;           // sample the two-sided Hausdorff distance
+  int hausdorff_samples = 100000;  // random surface samples per direction (plus all vertices)
   uint32_t seed = 1;
 };
 
 struct QuadMetrics {
   QuadTopology topology;
-  int irregular_vertices = 0;        // irregular_interior + irregular_boundary
-  double min_scaled_jacobian = 1;    // over all quad corners, w.r.t. the quad's own normal
-  double mean_angle_deviation = 0;   // degrees, |corner angle - 90| over all corners
-  double p95_angle_deviation = 0;    // degrees, 95th percentile
+  int irregular_vertices = 0;         // irregular_interior + irregular_boundary
+  double min_scaled_jacobian = 1;     // over all quad corners, w.r.t. the quad's own normal
+  double mean_angle_deviation = 0;    // degrees, |corner angle - 90| over all corners
+  double p95_angle_deviation = 0;     // degrees, 95th percentile
   std::vector<int> flipped_quad_ids;  // ascending: quads whose normal (of the diagonals) points against
                                       // the mean reference normal at the closest points of five
                                       // interior points
   int flipped_quads() const { return static_cast<int>(flipped_quad_ids.size()); }
-  double hausdorff = 0;              // max of the two directions, relative to the bbox diagonal
+  double hausdorff = 0;  // max of the two directions, relative to the bbox diagonal
   double hausdorff_quads_to_mesh = 0;
   double hausdorff_mesh_to_quads = 0;
 };

@@ -66,8 +66,9 @@ void update_tmesh(ComponentState& state, Progress& progress) {
   SanitizeResult exact = sanitize_with_isolines(
       state.mesh, param, isoline_constraints(state.mesh, param, traced.isoline_edges, true), SanitizeOptions{});
   if (exact.unresolved_equations > 0)
-    throw Error(ErrorCode::StageFailed, "T-mesh: " + std::to_string(exact.unresolved_equations) +
-                                            " transition or isoline equation(s) of the seamless map cannot hold exactly");
+    throw Error(ErrorCode::StageFailed,
+                "T-mesh: " + std::to_string(exact.unresolved_equations) +
+                    " transition or isoline equation(s) of the seamless map cannot hold exactly");
   TraceOptions trace_options;
   trace_options.feature_edges = traced.isoline_edges;
   traced.tmesh = trace_tmesh(state.mesh, exact.param, trace_options, progress);
@@ -79,9 +80,7 @@ void update_quantization(ComponentState& state, double edge_length, Quantizer qu
   const QuantizationKey key{state.traced.id(), state.seamless_edge_length() / edge_length, quantizer};
   if (state.quantization.computed_from(key)) return;
   switch (quantizer) {
-    case Quantizer::Greedy:
-      state.quantization.store(key, quantize_without_folds(state, key.scale, progress));
-      return;
+    case Quantizer::Greedy: state.quantization.store(key, quantize_without_folds(state, key.scale, progress)); return;
     case Quantizer::Round:
       state.quantization.store(key, quantize_by_rounding_baseline(state, key.scale, progress));
       return;

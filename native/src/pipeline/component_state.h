@@ -50,9 +50,9 @@ struct IgmResult {
 // The fallback map on the mesh with the T-mesh inserted (paper §7.1.1), where the global solve's
 // map stays flipped or wound.
 struct CellMapFallback {
-  bool ran = false;      // false: the integer-grid map did not need it
-  bool used = false;     // it has no flipped triangle and no wound one-ring: the run's uv map
-  std::string failure;   // why it could not be built (empty otherwise)
+  bool ran = false;            // false: the integer-grid map did not need it
+  bool used = false;           // it has no flipped triangle and no wound one-ring: the run's uv map
+  std::string failure;         // why it could not be built (empty otherwise)
   std::optional<CellMap> map;  // when used
   CellMapStats stats;
 };
@@ -108,9 +108,9 @@ struct ComponentState {
   StageResult<SeamlessMap, SeamlessKey> seamless;  // cut, edge length
   StageResult<TracedMap, uint64_t> traced;         // seamless
   StageResult<Quantized, QuantizationKey> quantization;
-  StageResult<IgmResult, uint64_t> igm;            // quantization
+  StageResult<IgmResult, uint64_t> igm;             // quantization
   StageResult<CellMapFallback, uint64_t> cell_map;  // igm
-  StageResult<QuadChoice, uint64_t> quads;         // igm
+  StageResult<QuadChoice, uint64_t> quads;          // igm
 
   // Model units per uv unit of the seamless map.
   double seamless_edge_length() const { return seamless.key().edge_length; }

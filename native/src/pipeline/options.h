@@ -12,9 +12,9 @@ namespace qgp {
 enum class Job { Intake, Remesh, GridUV };
 
 struct RemeshOptions {
-  double target_faces = 0;      // desired quad count; <= 0: unset
-  double edge_length = 0;       // desired quad edge length (model units); <= 0: unset
-  double sharp_angle_deg = -1;  // dihedral angle above which an edge is a feature; < 0: off
+  double target_faces = 0;                        // desired quad count; <= 0: unset
+  double edge_length = 0;                         // desired quad edge length (model units); <= 0: unset
+  double sharp_angle_deg = -1;                    // dihedral angle above which an edge is a feature; < 0: off
   std::vector<std::array<int, 2>> feature_edges;  // input vertex index pairs (marked sharp)
   Quantizer quantizer = Quantizer::Greedy;
   bool drop_bad_components = false;  // drop non-manifold / non-orientable parts instead of refusing

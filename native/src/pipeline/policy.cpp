@@ -197,8 +197,8 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
     latest = relinearized.stats;
     if (irregular_elements(relinearized.stats) < before) {
       map = std::move(relinearized);
-      map.stats.path = "global (penalty with regularity; " + std::to_string(before) +
-                       " irregular triangles or one-rings without)";
+      map.stats.path =
+          "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
     }
   }
   if (escalate && irregular_elements(map.stats) > 0) {
@@ -208,7 +208,8 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
     if (irregular_elements(all_faces.stats) < before) {
       map = std::move(all_faces);
       map.stats.fallback_used = true;
-      map.stats.path = "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
+      map.stats.path =
+          "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
     } else {
       map.stats.path = "global (all-faces fallback did not help)";
     }
@@ -239,7 +240,8 @@ CellMapFallback fallback_cell_map(const ComponentState& state, Progress& progres
   try {
     CellMapOptions options;
     options.cone_turns = cone_quarter_turns(state.mesh, *state.field);
-    CellMap map = map_cells_to_rectangles(state.mesh, state.traced->tmesh, state.quantization->result.x, progress, options);
+    CellMap map =
+        map_cells_to_rectangles(state.mesh, state.traced->tmesh, state.quantization->result.x, progress, options);
     fallback.stats = map.stats;
     fallback.used = map.stats.flipped_triangles + map.stats.wound_vertices == 0;
     if (fallback.used) fallback.map = std::move(map);

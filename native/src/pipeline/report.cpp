@@ -71,14 +71,10 @@ Json field_report(const std::vector<ComponentState>& components) {
     overconstrained += field.num_overconstrained_faces;
     collapsed += field.num_collapsed_sectors;
   }
-  return {{"singularities", singularities},
-          {"index_sum", index_quarters / 4},
-          {"euler_characteristic", euler},
-          {"feature_edges", feature_edges},
-          {"overconstrained_faces", overconstrained},
-          {"collapsed_sectors", collapsed},
-          {"cut_edges", cut_edges},
-          {"components", std::move(per_component)}};
+  return {
+      {"singularities", singularities}, {"index_sum", index_quarters / 4},          {"euler_characteristic", euler},
+      {"feature_edges", feature_edges}, {"overconstrained_faces", overconstrained}, {"collapsed_sectors", collapsed},
+      {"cut_edges", cut_edges},         {"components", std::move(per_component)}};
 }
 
 Json seamless_report(const std::vector<ComponentState>& components, double edge_length) {

@@ -24,12 +24,11 @@ void Session::set_options(const RemeshOptions& options) {
   if (!std::isfinite(options.target_faces) || !std::isfinite(options.edge_length) ||
       !std::isfinite(options.sharp_angle_deg))
     throw Error(ErrorCode::InvalidArgument, "options must be finite numbers");
-  if (options.sharp_angle_deg > 180)
-    throw Error(ErrorCode::InvalidArgument, "sharp angle must be at most 180 degrees");
+  if (options.sharp_angle_deg > 180) throw Error(ErrorCode::InvalidArgument, "sharp angle must be at most 180 degrees");
   for (const auto& e : options.feature_edges)
     if (e[0] < 0 || e[1] < 0 || e[0] >= input_.num_vertices() || e[1] >= input_.num_vertices() || e[0] == e[1])
-      throw Error(ErrorCode::InvalidArgument, "feature edge (" + std::to_string(e[0]) + ", " +
-                                                  std::to_string(e[1]) + ") is not a pair of distinct vertices of the mesh");
+      throw Error(ErrorCode::InvalidArgument, "feature edge (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
+                                                  ") is not a pair of distinct vertices of the mesh");
   if (options.drop_bad_components != options_.drop_bad_components) {
     intake_.reset();
     components_.clear();
@@ -196,7 +195,8 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for_each_component("cross_field", progress, [&](ComponentState& s) { update_cross_field(s, progress); });
   for_each_component("cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
   report_["field"] = field_report(components_);
-  for_each_component("seamless_map", progress, [&](ComponentState& s) { update_seamless_map(s, edge_length, progress); });
+  for_each_component("seamless_map", progress,
+                     [&](ComponentState& s) { update_seamless_map(s, edge_length, progress); });
   report_["seamless"] = seamless_report(components_, edge_length);
   for_each_component("tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
   report_["tmesh"] = tmesh_report(components_);
@@ -231,7 +231,8 @@ void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& ma
     for (int i = 0; i < 6; ++i) missing = missing || std::isnan(corner_uv_[6 * f + i]);
     if (!missing || (kept[f] && made_from[f].first < 0)) continue;
     Vec3 corner[3], centroid = Vec3::Zero();
-    for (int j = 0; j < 3; ++j) centroid += corner[j] = input_.positions[input_.face_vertices[input_.face_start[f] + j]];
+    for (int j = 0; j < 3; ++j)
+      centroid += corner[j] = input_.positions[input_.face_vertices[input_.face_start[f] + j]];
     centroid /= 3;
     auto [component, t] = made_from[f];
     if (component < 0) {
@@ -298,8 +299,8 @@ void Session::collect_grid_uvs() {
       const int h = state.mesh.edge_halfedge[e], o = state.mesh.opposite[h];
       if (o < 0) continue;
       const int a = state.mesh.F(h / 3, h % 3), b = state.mesh.F(h / 3, (h + 1) % 3);
-      const bool same = igm.uv[h] == igm.uv[3 * (o / 3) + (o + 1) % 3] &&
-                        igm.uv[3 * (h / 3) + (h + 1) % 3] == igm.uv[o];
+      const bool same =
+          igm.uv[h] == igm.uv[3 * (o / 3) + (o + 1) % 3] && igm.uv[3 * (h / 3) + (h + 1) % 3] == igm.uv[o];
       const int ia = input_vertex(a), ib = input_vertex(b);
       if (!same && ia >= 0 && ib >= 0) cuts.insert({std::min(ia, ib), std::max(ia, ib)});
     }

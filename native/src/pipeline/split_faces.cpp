@@ -15,7 +15,9 @@ int split_overconstrained_faces(TriMesh& mesh, std::vector<char>& feature_edges,
     if (constrained(3 * f) && constrained(3 * f + 1) && constrained(3 * f + 2)) split.push_back(f);
   if (split.empty()) return 0;
 
-  auto key = [](int a, int b) { return static_cast<uint64_t>(std::min(a, b)) << 32 | static_cast<uint32_t>(std::max(a, b)); };
+  auto key = [](int a, int b) {
+    return static_cast<uint64_t>(std::min(a, b)) << 32 | static_cast<uint32_t>(std::max(a, b));
+  };
   std::unordered_set<uint64_t> feature_pairs;
   for (int e = 0; e < mesh.num_edges(); ++e)
     if (feature_edges[e]) feature_pairs.insert(key(mesh.from(mesh.edge_halfedge[e]), mesh.to(mesh.edge_halfedge[e])));

@@ -19,12 +19,15 @@ bool available_uv_map(const Session& session, UvMapKind* kind) {
 UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
   UvMapKind available = UvMapKind::Seamless;
   if (!available_uv_map(session, &available) || (kind == UvMapKind::IntegerGrid && available != kind))
-    throw Error(ErrorCode::NotReady, kind == UvMapKind::IntegerGrid ? "no integer-grid map: run a grid-UV or remesh job first"
-                                                                     : "no seamless map: run a grid-UV or remesh job first");
+    throw Error(ErrorCode::NotReady, kind == UvMapKind::IntegerGrid
+                                         ? "no integer-grid map: run a grid-UV or remesh job first"
+                                         : "no seamless map: run a grid-UV or remesh job first");
   const IntakeResult& intake = *session.intake();
   const bool grid = kind == UvMapKind::IntegerGrid;
   auto refined = [&](const ComponentState& c) { return grid && cell_map_in_use(c) != nullptr; };
-  auto mesh_of = [&](const ComponentState& c) -> const TriMesh& { return refined(c) ? cell_map_in_use(c)->mesh : c.mesh; };
+  auto mesh_of = [&](const ComponentState& c) -> const TriMesh& {
+    return refined(c) ? cell_map_in_use(c)->mesh : c.mesh;
+  };
 
   UvMesh out;
   int num_vertices = intake.mesh.num_vertices(), num_faces = 0;

@@ -18,7 +18,7 @@ namespace {
 struct GridPoint {
   Vec3 position = Vec3::Zero();
   bool singular = false;
-  SurfacePoint point;   // where it lies in the map (face -1: unknown, found by projection)
+  SurfacePoint point;         // where it lies in the map (face -1: unknown, found by projection)
   Vec2 along = Vec2::Zero();  // unit direction of its T-edge (from -> to) in point.face's chart
 };
 
@@ -37,7 +37,8 @@ bool walk(const TriMesh& mesh, const ExactParametrization& param, const SurfaceP
   auto cross = [](const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); };
   for (int step = 0; step < 100000; ++step) {
     Vec2 c[3];
-    for (int k = 0; k < 3; ++k) c[k] = Vec2(param.to_double(param.uv[3 * f + k][0]), param.to_double(param.uv[3 * f + k][1]));
+    for (int k = 0; k < 3; ++k)
+      c[k] = Vec2(param.to_double(param.uv[3 * f + k][0]), param.to_double(param.uv[3 * f + k][1]));
     const double area = cross(c[1] - c[0], c[2] - c[0]);
     if (!(area > 0)) return false;
     auto barycentric = [&](const Vec2& x) {
@@ -86,8 +87,8 @@ void place_edge_points(const TriMesh& mesh, const TMesh& tm, int e, int64_t x, s
   // Cumulative parametric length over the straight pieces (pairs in the same face).
   std::vector<double> cumulative(trace.size(), 0.0);
   for (size_t i = 1; i < trace.size(); ++i)
-    cumulative[i] = cumulative[i - 1] +
-                    (trace[i].face == trace[i - 1].face ? (trace[i].uv - trace[i - 1].uv).norm() : 0.0);
+    cumulative[i] =
+        cumulative[i - 1] + (trace[i].face == trace[i - 1].face ? (trace[i].uv - trace[i - 1].uv).norm() : 0.0);
   const double total = trace.empty() ? 0.0 : cumulative.back();
   size_t piece = 1;
   for (int64_t k = 0; k <= x; ++k) {
@@ -142,8 +143,10 @@ std::array<OrientedSide, 4> orient_cell(const TMesh& tm, int c) {
     const TMeshEdge& p = tm.edges[edge_at(prev)];
     const int head = dir[prev] ? p.to : p.from;
     const TMeshEdge& e = tm.edges[edge_at(i)];
-    if (e.from == head && e.to == head) dir[i] = seen_forward[edge_at(i)] ? 0 : 1;  // a loop edge
-    else dir[i] = e.from == head ? 1 : 0;
+    if (e.from == head && e.to == head)
+      dir[i] = seen_forward[edge_at(i)] ? 0 : 1;  // a loop edge
+    else
+      dir[i] = e.from == head ? 1 : 0;
     if (dir[i]) seen_forward[edge_at(i)] = 1;
   }
   std::array<OrientedSide, 4> sides;
@@ -191,7 +194,12 @@ class LayoutQuadExtractor {
  public:
   LayoutQuadExtractor(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
                       const std::vector<int64_t>& x, Progress& progress, bool with_positions)
-      : mesh_(mesh), seamless_(seamless), tm_(tm), x_(x), progress_(progress), with_positions_(with_positions),
+      : mesh_(mesh),
+        seamless_(seamless),
+        tm_(tm),
+        x_(x),
+        progress_(progress),
+        with_positions_(with_positions),
         ne_(static_cast<int>(tm.edges.size())) {}
 
   // All the phases; the layout without its time.
@@ -219,13 +227,13 @@ class LayoutQuadExtractor {
   const bool with_positions_;
   const int ne_;
   LayoutQuads result_;
-  std::vector<int64_t> edge_first_;             // #edges: the id of each edge's first inner point
-  int64_t count_ = 0;                           // nodes and edges' inner points
-  std::vector<GridPoint> points_;               // by id
+  std::vector<int64_t> edge_first_;              // #edges: the id of each edge's first inner point
+  int64_t count_ = 0;                            // nodes and edges' inner points
+  std::vector<GridPoint> points_;                // by id
   std::vector<std::vector<GridPoint>> on_edge_;  // the x + 1 points of each edge, from -> to
-  UnionFind<int64_t> uf_;                       // points identified by collapses
-  std::vector<std::array<int64_t, 4>> quads_;   // point ids
-  std::vector<int> vertex_of_;                  // by id: the merged point
+  UnionFind<int64_t> uf_;                        // points identified by collapses
+  std::vector<std::array<int64_t, 4>> quads_;    // point ids
+  std::vector<int> vertex_of_;                   // by id: the merged point
   std::vector<GridPoint> merged_;
 };
 
@@ -252,7 +260,8 @@ void LayoutQuadExtractor::number_grid_points() {
   edge_first_.resize(ne_);
   count_ = static_cast<int64_t>(tm_.nodes.size());
   for (int e = 0; e < ne_; ++e) {
-    if (x_[e] < 0) throw Error(ErrorCode::InvalidArgument, "layout quads: negative length of T-edge " + std::to_string(e));
+    if (x_[e] < 0)
+      throw Error(ErrorCode::InvalidArgument, "layout quads: negative length of T-edge " + std::to_string(e));
     edge_first_[e] = count_;
     count_ += std::max<int64_t>(0, x_[e] - 1);
     result_.stats.zero_edges += x_[e] == 0;
@@ -301,11 +310,13 @@ CellGrid LayoutQuadExtractor::cell_sides(int c) {
         const int64_t kk = forward ? k : x_[e] - k;
         const GridPoint& p = on_edge_[e][kk];
         const double fraction = x_[e] > 0 ? static_cast<double>(k) / static_cast<double>(x_[e]) : 0.0;
-        g.side[s].push_back({edge_point(e, kk), &p, forward ? p.along : Vec2(-p.along), g.length[s] + fraction * tm_.edges[e].length});
+        g.side[s].push_back(
+            {edge_point(e, kk), &p, forward ? p.along : Vec2(-p.along), g.length[s] + fraction * tm_.edges[e].length});
       }
       g.length[s] += tm_.edges[e].length;
     }
-    if (g.side[s].empty()) throw Error(ErrorCode::InvalidArgument, "layout quads: cell " + std::to_string(c) + " has an empty side");
+    if (g.side[s].empty())
+      throw Error(ErrorCode::InvalidArgument, "layout quads: cell " + std::to_string(c) + " has an empty side");
   }
   g.w = static_cast<int64_t>(g.side[0].size()) - 1, g.h = static_cast<int64_t>(g.side[1].size()) - 1;
   if (static_cast<int64_t>(g.side[2].size()) - 1 != g.w || static_cast<int64_t>(g.side[3].size()) - 1 != g.h)
@@ -384,9 +395,9 @@ void LayoutQuadExtractor::place_inner_points(const CellGrid& g) {
       }
       // No usable start: the Coons patch of the sides, projected onto the surface later.
       ++result_.stats.walk_failures;
-      p.position = (1 - t) * pos(i, 0) + t * pos(i, h) + (1 - s) * pos(0, j) + s * pos(w, j) -
-                   ((1 - s) * (1 - t) * pos(0, 0) + s * (1 - t) * pos(w, 0) + (1 - s) * t * pos(0, h) +
-                    s * t * pos(w, h));
+      p.position =
+          (1 - t) * pos(i, 0) + t * pos(i, h) + (1 - s) * pos(0, j) + s * pos(w, j) -
+          ((1 - s) * (1 - t) * pos(0, 0) + s * (1 - t) * pos(w, 0) + (1 - s) * t * pos(0, h) + s * t * pos(w, h));
     }
 }
 
@@ -465,6 +476,5 @@ LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization
   result.stats.seconds = timer.seconds();
   return result;
 }
-
 
 }  // namespace qgp

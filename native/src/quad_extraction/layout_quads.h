@@ -24,16 +24,16 @@
 namespace qgp {
 
 struct LayoutQuadsStats {
-  int64_t quads = 0;           // == sum over cells of w * h
-  int collapsed_cells = 0;     // cells of zero width or height
-  int zero_edges = 0;          // T-edges of length 0
-  int merged_points = 0;       // grid points identified with others by the collapses
-  int walk_failures = 0;       // inner points placed by the Coons patch (no walk in the map)
+  int64_t quads = 0;        // == sum over cells of w * h
+  int collapsed_cells = 0;  // cells of zero width or height
+  int zero_edges = 0;       // T-edges of length 0
+  int merged_points = 0;    // grid points identified with others by the collapses
+  int walk_failures = 0;    // inner points placed by the Coons patch (no walk in the map)
   double seconds = 0;
 };
 
 struct LayoutQuads {
-  QuadMesh quads;  // vertex_face (working-mesh triangle), vertex_singular and quad_face are filled
+  QuadMesh quads;              // vertex_face (working-mesh triangle), vertex_singular and quad_face are filled
   std::vector<int> quad_cell;  // #Q: the T-mesh cell each quad belongs to
   LayoutQuadsStats stats;
 };

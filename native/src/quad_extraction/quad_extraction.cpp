@@ -47,11 +47,11 @@ struct RayAlias {
 
 // An outgoing integer isoline direction at a grid point: a half-edge of the quad mesh.
 struct Ray {
-  int face = -1;       // owning face: contains the half-open sector starting at the ray
-  int8_t dir = 0;      // direction in the owning face's chart
+  int face = -1;              // owning face: contains the half-open sector starting at the ray
+  int8_t dir = 0;             // direction in the owning face's chart
   bool sector_inside = true;  // the sector from this ray to the next counter-clockwise one lies
                               // on the surface (false only for the last ray at a boundary point)
-  IVec2 start{0, 0};   // the grid point in the owning face's chart
+  IVec2 start{0, 0};          // the grid point in the owning face's chart
   std::array<RayAlias, 2> alias;
   int num_alias = 0;
   int dest_point = -1;  // traced: the grid point reached ...
@@ -59,9 +59,9 @@ struct Ray {
 };
 
 struct GridPoint {
-  int face = -1;        // a face containing the point and its coordinates in that chart
+  int face = -1;  // a face containing the point and its coordinates in that chart
   IVec2 uv{0, 0};
-  int mesh_vertex = -1; // set if the point is a mesh vertex
+  int mesh_vertex = -1;  // set if the point is a mesh vertex
   bool boundary = false;
   int ray_begin = 0, ray_count = 0;  // its rays: rays[ray_begin .. ray_begin + ray_count)
 };
@@ -132,7 +132,8 @@ class Extractor {
   void validate_input() {
     const size_t nh = static_cast<size_t>(mesh_.num_halfedges());
     if (mesh_.opposite.size() != nh || mesh_.vertex_halfedge.size() != static_cast<size_t>(mesh_.num_vertices()))
-      throw Error(ErrorCode::InvalidArgument, "quad extraction: the mesh has no connectivity (call build_connectivity)");
+      throw Error(ErrorCode::InvalidArgument,
+                  "quad extraction: the mesh has no connectivity (call build_connectivity)");
     if (igm_.uv.size() != nh || igm_.rotation.size() != nh || igm_.translation.size() != nh)
       throw Error(ErrorCode::InvalidArgument, "quad extraction: the integer-grid map does not match the mesh (" +
                                                   std::to_string(igm_.uv.size()) + " corners for " +
@@ -142,11 +143,11 @@ class Extractor {
     for (size_t c = 0; c < nh; ++c) {
       for (int a = 0; a < 2; ++a)
         if (std::llabs(igm_.uv[c][a]) >= kMaxCoordinate || std::llabs(igm_.translation[c][a]) >= kMaxCoordinate)
-          throw Error(ErrorCode::InvalidArgument, "quad extraction: coordinates of face " + std::to_string(c / 3) +
-                                                      " exceed 2^58 grid units");
+          throw Error(ErrorCode::InvalidArgument,
+                      "quad extraction: coordinates of face " + std::to_string(c / 3) + " exceed 2^58 grid units");
       if (igm_.rotation[c] < 0 || igm_.rotation[c] > 3)
-        throw Error(ErrorCode::InvalidArgument, "quad extraction: rotation of halfedge " + std::to_string(c) +
-                                                    " is not in 0..3");
+        throw Error(ErrorCode::InvalidArgument,
+                    "quad extraction: rotation of halfedge " + std::to_string(c) + " is not in 0..3");
     }
     for (int h = 0; h < mesh_.num_halfedges(); ++h) {
       const int o = mesh_.opposite[h];
@@ -543,8 +544,8 @@ class Extractor {
       if (!ok) {
         ++s.failed_traces;
         ray.dest_point = ray.dest_ray = -1;
-        note_defect("isoline from face " + std::to_string(ray.face) + " direction " + std::to_string(ray.dir) +
-                    ": " + why);
+        note_defect("isoline from face " + std::to_string(ray.face) + " direction " + std::to_string(ray.dir) + ": " +
+                    why);
         if (budget_exhausted_) {
           // The map is wild: give up on the remaining isolines.
           if (!options_.allow_defects) throw_defects();
@@ -610,21 +611,33 @@ class Extractor {
         visited[r] = 1;
         corners.push_back(ray_owner[r]);
         const Ray& ray = rays_[r];
-        if (ray.dest_ray < 0) { broken = true; break; }
+        if (ray.dest_ray < 0) {
+          broken = true;
+          break;
+        }
         const GridPoint& q = points_[ray.dest_point];
         const int idx = ray.dest_ray - q.ray_begin;
         r = q.ray_begin + (idx + q.ray_count - 1) % q.ray_count;
-        if (!rays_[r].sector_inside) { broken = true; break; }
-        if (r == static_cast<int>(r0)) { closed = true; break; }
-        if (visited[r]) { broken = true; break; }
+        if (!rays_[r].sector_inside) {
+          broken = true;
+          break;
+        }
+        if (r == static_cast<int>(r0)) {
+          closed = true;
+          break;
+        }
+        if (visited[r]) {
+          broken = true;
+          break;
+        }
       }
       if (closed && corners.size() == 4) {
         quads.push_back({corners[0], corners[1], corners[2], corners[3]});
         quad_face.push_back(rays_[r0].face);
       } else {
         ++s.non_quad_faces;
-        note_defect(std::string(broken || !closed ? "an open face walk" : "a face with " +
-                                std::to_string(corners.size()) + " sides") +
+        note_defect(std::string(broken || !closed ? "an open face walk"
+                                                  : "a face with " + std::to_string(corners.size()) + " sides") +
                     " at the grid point in face " + std::to_string(points_[ray_owner[r0]].face));
       }
     }
@@ -641,10 +654,10 @@ class Extractor {
   const int64_t one_;
   QuadExtraction result_;
   std::string first_defect_;
-  std::vector<char> face_ok_;         // #F: positive parametric area
+  std::vector<char> face_ok_;  // #F: positive parametric area
   std::vector<GridPoint> points_;
   std::vector<Ray> rays_;
-  std::vector<int> vertex_point_;     // #V: grid point on the vertex or -1
+  std::vector<int> vertex_point_;                               // #V: grid point on the vertex or -1
   std::unordered_map<PointKey, int, PointKeyHash> edge_point_;  // (coords in edge_halfedge's chart, edge)
   std::unordered_map<PointKey, int, PointKeyHash> face_point_;  // (coords, face)
   int64_t step_budget_ = 0;
@@ -662,8 +675,8 @@ QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& ig
 
 void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
   const int nv = into.num_vertices(), nq = into.num_quads();
-  const bool had_vertex_data = into.vertex_face.size() == static_cast<size_t>(nv) &&
-                               into.vertex_singular.size() == static_cast<size_t>(nv);
+  const bool had_vertex_data =
+      into.vertex_face.size() == static_cast<size_t>(nv) && into.vertex_singular.size() == static_cast<size_t>(nv);
   const bool had_quad_face = into.quad_face.size() == static_cast<size_t>(nq);
   into.V.conservativeResize(nv + part.num_vertices(), 3);
   into.V.bottomRows(part.num_vertices()) = part.V;
@@ -685,9 +698,8 @@ void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
 }
 
 void to_json(Json& j, const QuadExtractionStats& s) {
-  j["grid_points"] = {{"vertices", s.grid_points_on_vertices},
-                      {"edges", s.grid_points_on_edges},
-                      {"faces", s.grid_points_in_faces}};
+  j["grid_points"] = {
+      {"vertices", s.grid_points_on_vertices}, {"edges", s.grid_points_on_edges}, {"faces", s.grid_points_in_faces}};
   j["traced_segments"] = s.traced_segments;
   j["triangle_steps"] = s.triangle_steps;
   j["expected_quads"] = s.expected_quads;

@@ -38,19 +38,19 @@ struct QuadExtractionStats {
   int grid_points_on_vertices = 0;
   int grid_points_on_edges = 0;
   int grid_points_in_faces = 0;
-  int64_t traced_segments = 0;       // isoline segments traced (each quad edge twice, once per
-                                     // direction; boundary edges twice too)
-  int64_t triangle_steps = 0;        // triangles visited while tracing
-  int64_t expected_quads = 0;        // parametric area of the map (integer for an IGM)
-  bool area_is_integral = true;      // false if the parametric area is not a whole number
-  int singular_vertices = 0;         // quad vertices flagged singular
-  int boundary_edges = 0;            // quad edges with a face on one side only
+  int64_t traced_segments = 0;   // isoline segments traced (each quad edge twice, once per
+                                 // direction; boundary edges twice too)
+  int64_t triangle_steps = 0;    // triangles visited while tracing
+  int64_t expected_quads = 0;    // parametric area of the map (integer for an IGM)
+  bool area_is_integral = true;  // false if the parametric area is not a whole number
+  int singular_vertices = 0;     // quad vertices flagged singular
+  int boundary_edges = 0;        // quad edges with a face on one side only
   // Defects (all 0 for a valid integer-grid map):
-  int flipped_triangles = 0;         // negative parametric area
-  int degenerate_triangles = 0;      // zero parametric area
-  int failed_traces = 0;             // isolines that left the surface or did not meet a grid point
-  int inconsistent_segments = 0;     // traced A->B but B's reverse trace does not return to A
-  int non_quad_faces = 0;            // walked faces with a number of sides other than 4
+  int flipped_triangles = 0;      // negative parametric area
+  int degenerate_triangles = 0;   // zero parametric area
+  int failed_traces = 0;          // isolines that left the surface or did not meet a grid point
+  int inconsistent_segments = 0;  // traced A->B but B's reverse trace does not return to A
+  int non_quad_faces = 0;         // walked faces with a number of sides other than 4
   double seconds = 0;
 };
 
@@ -62,8 +62,8 @@ struct QuadExtraction {
 // mesh: working triangle mesh with connectivity; igm: exact integer-grid map of it (one chart per
 // face, see core/parametrization.h). Throws Error(InvalidArgument) on mismatched sizes,
 // Error(StageFailed) on defects unless options.allow_defects, Error(Cancelled) on cancel.
-QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& igm,
-                             const QuadExtractionOptions& options, Progress& progress);
+QuadExtraction extract_quads(const TriMesh& mesh, const ExactParametrization& igm, const QuadExtractionOptions& options,
+                             Progress& progress);
 
 // Appends `part` (e.g. one intake component's quads) to `into`, offsetting vertex indices and
 // tagging its quads with `component` (per-vertex/per-quad source data is kept only if both have it).

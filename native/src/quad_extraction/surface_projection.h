@@ -18,7 +18,7 @@ class TriangleBvh {
   explicit TriangleBvh(const TriMesh& mesh);
 
   struct Hit {
-    int triangle = -1;      // index into the triangle list (the face index for a TriMesh)
+    int triangle = -1;  // index into the triangle list (the face index for a TriMesh)
     Vec3 point = Vec3::Zero();
     double squared_distance = 0;
   };

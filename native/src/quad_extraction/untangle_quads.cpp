@@ -39,7 +39,8 @@ class FeatureCurves {
       Vec3 d[2];
       for (int i = 0; i < 2; ++i) {
         const int h = surface.edge_halfedge[edges_at_[u][i]];
-        d[i] = (surface.position(surface.from(h) == u ? surface.to(h) : surface.from(h)) - surface.position(u)).normalized();
+        d[i] = (surface.position(surface.from(h) == u ? surface.to(h) : surface.from(h)) - surface.position(u))
+                   .normalized();
       }
       corner_[u] = !(d[0].dot(d[1]) < -std::cos(M_PI / 180));
     }
@@ -48,8 +49,8 @@ class FeatureCurves {
   // Where a quad vertex at p in surface triangle f sits.
   struct Place {
     enum Kind { kFree, kOnCurve, kCorner } kind = kFree;
-    int edge = -1;   // kOnCurve: the surface edge ...
-    double s = 0;    // ... and the parameter along it, from(edge_halfedge) = 0 to to(edge_halfedge) = 1
+    int edge = -1;  // kOnCurve: the surface edge ...
+    double s = 0;   // ... and the parameter along it, from(edge_halfedge) = 0 to to(edge_halfedge) = 1
   };
   Place locate(const Vec3& p, int f) const {
     Place place;
@@ -66,7 +67,8 @@ class FeatureCurves {
         place.kind = Place::kCorner;
         return place;
       }
-      place = {Place::kOnCurve, edges_at_[u][0], surface_.from(surface_.edge_halfedge[edges_at_[u][0]]) == u ? 0.0 : 1.0};
+      place = {Place::kOnCurve, edges_at_[u][0],
+               surface_.from(surface_.edge_halfedge[edges_at_[u][0]]) == u ? 0.0 : 1.0};
     }
     if (place.kind != Place::kFree) return place;
     for (int k = 0; k < 3; ++k) {
@@ -85,7 +87,9 @@ class FeatureCurves {
     return surface_.position(surface_.from(h)) + place.s * surface_.edge_vector(h);
   }
   // Unit direction of increasing s.
-  Vec3 direction(const Place& place) const { return surface_.edge_vector(surface_.edge_halfedge[place.edge]).normalized(); }
+  Vec3 direction(const Place& place) const {
+    return surface_.edge_vector(surface_.edge_halfedge[place.edge]).normalized();
+  }
   int face(const Place& place) const { return TriMesh::face(surface_.edge_halfedge[place.edge]); }
 
   // The place `distance` away along the curve (towards increasing s if positive), stopping at corners.
@@ -118,7 +122,7 @@ class FeatureCurves {
   const TriMesh& surface_;
   const std::vector<char>& feature_edges_;
   std::vector<std::vector<int>> edges_at_;  // per surface vertex: its feature and boundary edges
-  std::vector<char> corner_;                 // per surface vertex
+  std::vector<char> corner_;                // per surface vertex
 };
 
 // How far a free vertex may go from where it started, in its mean edge lengths: the short reach
@@ -154,7 +158,9 @@ void quality_terms(const QuadMesh& quads, const Star& star, const Vec3& x, std::
 struct StarKey {
   int flipped = 0;
   double worst = std::numeric_limits<double>::infinity();
-  bool better_than(const StarKey& o) const { return flipped < o.flipped || (flipped == o.flipped && worst > o.worst + 1e-12); }
+  bool better_than(const StarKey& o) const {
+    return flipped < o.flipped || (flipped == o.flipped && worst > o.worst + 1e-12);
+  }
 };
 StarKey star_key(const std::vector<double>& terms) {
   StarKey key;
@@ -169,7 +175,11 @@ StarKey star_key(const std::vector<double>& terms) {
 class Untangler {
  public:
   Untangler(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges, Progress& progress)
-      : quads_(quads), surface_(surface), bvh_(surface), curves_(surface, feature_edges), progress_(progress),
+      : quads_(quads),
+        surface_(surface),
+        bvh_(surface),
+        curves_(surface, feature_edges),
+        progress_(progress),
         start_(quads.V) {
     const int nv = quads.num_vertices(), nq = quads.num_quads();
     flipped_.assign(nq, 0);
@@ -378,9 +388,9 @@ class Untangler {
   std::vector<FeatureCurves::Place> place_;  // per quad vertex: free, on a curve, or at a corner
   std::vector<char> fixed_;
   std::vector<double> mean_edge_;
-  std::vector<Vec3> quad_normal_;   // per quad, at the start of the current round
+  std::vector<Vec3> quad_normal_;  // per quad, at the start of the current round
   std::vector<double> quad_scale_;
-  std::vector<double> c_, terms_;   // scratch
+  std::vector<double> c_, terms_;  // scratch
   std::vector<Vec2> g_;
 };
 

@@ -9,9 +9,7 @@ namespace qgp {
 
 namespace {
 
-[[noreturn]] void invalid(const std::string& what) {
-  throw Error(ErrorCode::InvalidArgument, "T-mesh: " + what);
-}
+[[noreturn]] void invalid(const std::string& what) { throw Error(ErrorCode::InvalidArgument, "T-mesh: " + what); }
 
 // Fills the tables of a CellSystem from its T-mesh, one phase per method, validating the topology
 // on the way (the phases must run in the constructor's order). Holds the scratch data they share.
@@ -52,10 +50,10 @@ class CellSystemBuilder {
 
   CellSystem& sys_;
   const TMesh& tmesh_;
-  std::vector<int> occ_cell_, occ_side_;          // #occurrences
-  std::vector<std::array<int, 2>> edge_occ_;      // #edges: its occurrences
-  std::vector<int> edge_occ_count_;               // #edges
-  std::vector<char> ambiguous_;                   // #edges: the same cell on both sides
+  std::vector<int> occ_cell_, occ_side_;      // #occurrences
+  std::vector<std::array<int, 2>> edge_occ_;  // #edges: its occurrences
+  std::vector<int> edge_occ_count_;           // #edges
+  std::vector<char> ambiguous_;               // #edges: the same cell on both sides
 };
 
 void CellSystemBuilder::validate_edges() const {
@@ -128,10 +126,13 @@ void CellSystemBuilder::assign_slots() {
     }
     for (int i = 0; i < expected; ++i) {
       const int o = edge_occ_[e][i];
-      if (occ_cell_[o] == cells[0]) sys_.occ_slot[o] = 0;
-      else if (occ_cell_[o] == cells[1]) sys_.occ_slot[o] = 1;
-      else invalid("edge " + std::to_string(e) + " lies on a side of cell " + std::to_string(occ_cell_[o]) +
-                   " which is not one of its cells");
+      if (occ_cell_[o] == cells[0])
+        sys_.occ_slot[o] = 0;
+      else if (occ_cell_[o] == cells[1])
+        sys_.occ_slot[o] = 1;
+      else
+        invalid("edge " + std::to_string(e) + " lies on a side of cell " + std::to_string(occ_cell_[o]) +
+                " which is not one of its cells");
     }
   }
 }
@@ -189,9 +190,9 @@ void CellSystemBuilder::report_broken_chain(int c, int b, int end) const {
     const int next = o + 1 < end ? o + 1 : b;
     if (sys_.occ_end_node[o] != sys_.occ_start_node[next])
       invalid("cell " + std::to_string(c) + ": its sides are not a closed counter-clockwise chain (edge " +
-              std::to_string(sys_.occ_edge[o]) + " ends at node " + std::to_string(sys_.occ_end_node[o]) +
-              ", edge " + std::to_string(sys_.occ_edge[next]) + " starts at node " +
-              std::to_string(sys_.occ_start_node[next]) + ")");
+              std::to_string(sys_.occ_edge[o]) + " ends at node " + std::to_string(sys_.occ_end_node[o]) + ", edge " +
+              std::to_string(sys_.occ_edge[next]) + " starts at node " + std::to_string(sys_.occ_start_node[next]) +
+              ")");
   }
 }
 

@@ -20,8 +20,8 @@
 namespace qgp {
 
 struct EdgeSlot {
-  int cell = -1;   // -1: no cell on this side (boundary)
-  int side = -1;   // 0..3
+  int cell = -1;        // -1: no cell on this side (boundary)
+  int side = -1;        // 0..3
   int occurrence = -1;  // global occurrence index (see CellSystem::occ_*)
 };
 
@@ -41,15 +41,15 @@ class CellSystem {
   // Occurrences of side (c,s) are [side_begin(c,s), side_end(c,s)); occ_edge/occ_slot give the
   // edge and which of its slots the occurrence is; occ_start_node is the node where the
   // occurrence starts going counter-clockwise (the end is the next occurrence's start).
-  std::vector<int> side_offset;  // 4#C + 1
+  std::vector<int> side_offset;                                       // 4#C + 1
   std::vector<int> occ_edge, occ_slot, occ_start_node, occ_end_node;  // #occurrences
   int side_begin(int c, int s) const { return side_offset[4 * c + s]; }
   int side_end(int c, int s) const { return side_offset[4 * c + s + 1]; }
 
   // Positions of each node on cell sides: (side id 4c+s, k) with the node at the start of the
   // k-th occurrence of the side (k = length: at its end). CSR over nodes.
-  std::vector<int> node_pos_offset;                // #N + 1
-  std::vector<std::array<int, 2>> node_pos;        // (side id, k)
+  std::vector<int> node_pos_offset;          // #N + 1
+  std::vector<std::array<int, 2>> node_pos;  // (side id, k)
   // Edges incident to each node (each loop once). CSR over nodes.
   std::vector<int> node_edge_offset, node_edge;
 

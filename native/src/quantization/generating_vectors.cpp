@@ -32,8 +32,10 @@ void make_elementary(std::vector<int>& walk, int s, bool is_path) {
   std::vector<int> out;
   for (int n : walk) {
     const auto it = std::find(out.begin(), out.end(), n);
-    if (it != out.end()) out.erase(it + 1, out.end());
-    else out.push_back(n);
+    if (it != out.end())
+      out.erase(it + 1, out.end());
+    else
+      out.push_back(n);
   }
   walk.swap(out);
 }
@@ -203,8 +205,10 @@ void GeneratingVectorSearch::grow_fronts() {
     const double best = std::min(best_cycle_, sink_cost_ + source_cost_);
     const double bound = std::min(top_f + top_b, std::min(sink_cost_, top_f) + std::min(source_cost_, top_b));
     if (bound >= best) break;
-    if (top_f <= top_b) settle_next_forward();
-    else settle_next_backward();
+    if (top_f <= top_b)
+      settle_next_forward();
+    else
+      settle_next_backward();
   }
 }
 
@@ -232,8 +236,10 @@ bool GeneratingVectorSearch::trace_result(std::vector<int>& dnodes) const {
   const double best = std::min(best_cycle_, sink_cost_ + source_cost_);
   if (!(best < kInf)) return false;
   const bool is_path = sink_cost_ + source_cost_ < best_cycle_;
-  if (is_path) trace_path(dnodes);
-  else trace_circuit(dnodes);
+  if (is_path)
+    trace_path(dnodes);
+  else
+    trace_circuit(dnodes);
   make_elementary(dnodes, s_, is_path);
   return true;
 }

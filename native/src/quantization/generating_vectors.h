@@ -62,13 +62,13 @@ class GeneratingVectorSearch {
   void offer_circuit(double cost, int a, int b);
   // Writes the best circuit or path into dnodes (loop-erased); false if there is none.
   bool trace_result(std::vector<int>& dnodes) const;
-  void trace_path(std::vector<int>& dnodes) const;     // source -> ... -> s -> ... -> sink
-  void trace_circuit(std::vector<int>& dnodes) const;  // s -> ... -> a -> b -> ... -> s
+  void trace_path(std::vector<int>& dnodes) const;         // source -> ... -> s -> ... -> sink
+  void trace_circuit(std::vector<int>& dnodes) const;      // s -> ... -> a -> b -> ... -> s
   void push_dnode(int n, std::vector<int>& dnodes) const;  // appends n unless it is a hub
 
   const CellSystem& system_;
   int num_dnodes_ = 0;
-  std::vector<int> next_hub_, prev_hub_;  // #D-nodes: hub entered / left, -1 at the boundary
+  std::vector<int> next_hub_, prev_hub_;       // #D-nodes: hub entered / left, -1 at the boundary
   std::vector<int> exit_dnode_, enter_dnode_;  // per side occurrence: D-node leaving / entering
   std::vector<NodeState> state_;
   std::vector<uint32_t> edge_seen_;

@@ -55,11 +55,11 @@ struct QuantizationResult {
   Quantizer quantizer = Quantizer::Greedy;
   double scale = 1;
   bool valid = false;
-  std::string invalid_reason;    // empty when valid
-  double objective = 0;          // sum_e (x(e)/x_ideal(e) - 1)^2 of the result
-  int zero_edges = 0;            // edges with x = 0
-  int stage1_steps = 0;          // generating vectors added in stage I
-  int stage2_steps = 0;          // accepted stage II steps (additions + subtractions)
+  std::string invalid_reason;  // empty when valid
+  double objective = 0;        // sum_e (x(e)/x_ideal(e) - 1)^2 of the result
+  int zero_edges = 0;          // edges with x = 0
+  int stage1_steps = 0;        // generating vectors added in stage I
+  int stage2_steps = 0;        // accepted stage II steps (additions + subtractions)
   int stage2_additions = 0, stage2_subtractions = 0;
   bool stage2_converged = true;     // false if stage II stopped at its time limit
   int stage2_rejected_invalid = 0;  // improving candidates rejected by the validity test
@@ -104,7 +104,7 @@ double quantization_scale_for_edge_length(const TMesh& tmesh, double surface_are
 
 // Helpers on integer lengths (x: #edges).
 int64_t quantization_consistency_residual(const TMesh& tmesh, const std::vector<int64_t>& x);  // max |Ax|
-int64_t quantization_quads(const TMesh& tmesh, const std::vector<int64_t>& x);  // sum width*height
+int64_t quantization_quads(const TMesh& tmesh, const std::vector<int64_t>& x);                 // sum width*height
 double quantization_objective(const TMesh& tmesh, const std::vector<int64_t>& x, double scale,
                               double min_ideal_length = 1e-3);
 

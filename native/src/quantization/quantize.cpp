@@ -128,8 +128,10 @@ class GreedyQuantizer {
     for (int n : dnodes) {
       const int e = n / 2;
       const int at = change_index_[e];
-      if (at < static_cast<int>(changes_.size()) && changes_[at].edge == e) changes_[at].delta += sign;
-      else change_index_[e] = static_cast<int>(changes_.size()), changes_.push_back({e, sign});
+      if (at < static_cast<int>(changes_.size()) && changes_[at].edge == e)
+        changes_[at].delta += sign;
+      else
+        change_index_[e] = static_cast<int>(changes_.size()), changes_.push_back({e, sign});
     }
   }
   void apply_changes(int sign) {
@@ -313,8 +315,10 @@ class GreedyQuantizer {
     size_t kept = 0;
     for (const auto& d : list) {
       if (generation_[d.first] != d.second) continue;  // stale
-      if (keep(d.first)) list[kept++] = d;
-      else push_candidate(d.first);
+      if (keep(d.first))
+        list[kept++] = d;
+      else
+        push_candidate(d.first);
     }
     stored_dependencies_ -= static_cast<int64_t>(list.size() - kept);
     list.resize(kept);
@@ -480,7 +484,8 @@ int64_t quantization_quads(const TMesh& tmesh, const std::vector<int64_t>& x) {
   return quads;
 }
 
-double quantization_objective(const TMesh& tmesh, const std::vector<int64_t>& x, double scale, double min_ideal_length) {
+double quantization_objective(const TMesh& tmesh, const std::vector<int64_t>& x, double scale,
+                              double min_ideal_length) {
   double sum = 0;
   for (size_t e = 0; e < tmesh.edges.size(); ++e) {
     const double ideal = std::max(scale * tmesh.edges[e].length, min_ideal_length);

@@ -118,8 +118,8 @@ struct FixedValues {
 // Fixes isolated vertices, the snapped vertices and the snapped axes of corners at their rounded
 // values in s1 (unit: parameter units per grid unit).
 FixedValues rounded_fixed_values(const TriMesh& mesh, const ExactParametrization& s1, const VertexCharts& charts,
-                                 const std::vector<char>& snap_vertices,
-                                 const std::vector<uint8_t>& snap_corner_axes, double unit) {
+                                 const std::vector<char>& snap_vertices, const std::vector<uint8_t>& snap_corner_axes,
+                                 double unit) {
   const int nv = mesh.num_vertices(), nc = 3 * mesh.num_faces();
   FixedValues fv{std::vector<char>(2 * nv, 0), std::vector<double>(2 * nv, 0)};
   std::vector<char>& fixed = fv.fixed;
@@ -192,8 +192,10 @@ ReducedSystem assemble_reduced_system(const TriMesh& mesh, const Parametrization
   rhs = Eigen::VectorXd::Zero(sys.nfree);
   auto add = [&](int row, int col, double a) {
     if (free_index[row] < 0) return;
-    if (free_index[col] >= 0) sys.triplets.emplace_back(free_index[row], free_index[col], a);
-    else rhs[free_index[row]] -= a * fv.value[col];
+    if (free_index[col] >= 0)
+      sys.triplets.emplace_back(free_index[row], free_index[col], a);
+    else
+      rhs[free_index[row]] -= a * fv.value[col];
   };
   for (int f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
@@ -209,7 +211,9 @@ ReducedSystem assemble_reduced_system(const TriMesh& mesh, const Parametrization
       const Eigen::Matrix2d Rj = rotation_matrix(charts.corner_rotation[cj]);
       const Vec2 target = scaled.corner(f, i) - scaled.corner(f, j);
       const Vec2 b0 = Vec2(charts.corner_translation[ci][0] - charts.corner_translation[cj][0],
-                           charts.corner_translation[ci][1] - charts.corner_translation[cj][1]) * unit - target;
+                           charts.corner_translation[ci][1] - charts.corner_translation[cj][1]) *
+                          unit -
+                      target;
       // E += w |Ri Wi - Rj Wj + b0|^2: gradient rows of Wi and Wj.
       const Eigen::Matrix2d cross_block = -Ri.transpose() * Rj;
       const Vec2 gi = Ri.transpose() * b0, gj = -Rj.transpose() * b0;
@@ -289,8 +293,10 @@ RoundedMap round_parametrization(const TriMesh& mesh, const Parametrization& par
                                  double scale, int fraction_bits) {
   const int nv = mesh.num_vertices(), nf = mesh.num_faces(), nc = 3 * nf;
   if (param.uv.rows() != nc || static_cast<int>(param.rotation.size()) != nc ||
-      static_cast<int>(snap_vertices.size()) != nv || (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges()))
-    throw Error(ErrorCode::InvalidArgument, "rounding: parametrization, features or vertex flags do not match the mesh");
+      static_cast<int>(snap_vertices.size()) != nv ||
+      (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != mesh.num_edges()))
+    throw Error(ErrorCode::InvalidArgument,
+                "rounding: parametrization, features or vertex flags do not match the mesh");
   if (!(scale > 0) || !std::isfinite(scale)) throw Error(ErrorCode::InvalidArgument, "rounding: invalid scale");
 
   Parametrization scaled = param;
@@ -349,7 +355,8 @@ RoundingResult quantize_by_rounding(const TriMesh& mesh, const Parametrization& 
   for (size_t e = 0; e < out.tmesh.edges.size(); ++e) {
     const double length = out.tmesh.edges[e].length;
     if (length != std::round(length))
-      return finish("the rounded map's T-edge " + std::to_string(e) + " has non-integer length " + std::to_string(length));
+      return finish("the rounded map's T-edge " + std::to_string(e) + " has non-integer length " +
+                    std::to_string(length));
     r.x[e] = static_cast<int64_t>(length);
   }
   r.zero_edges = static_cast<int>(std::count(r.x.begin(), r.x.end(), 0));

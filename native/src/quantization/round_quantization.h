@@ -21,12 +21,12 @@
 namespace qgp {
 
 struct RoundedMap {
-  ExactParametrization param;      // integer singular vertices, translations and isolines
+  ExactParametrization param;          // integer singular vertices, translations and isolines
   std::vector<char> snapped_vertices;  // #V: vertices whose position was rounded
-  int flipped_triangles = 0;       // parametric area < 0 in `param` (exact sign)
-  int degenerate_triangles = 0;    // parametric area == 0
-  int unresolved_equations = 0;    // of the sanitization (0 expected)
-  double max_change = 0;           // largest |rounded - continuous| over corners (quad units)
+  int flipped_triangles = 0;           // parametric area < 0 in `param` (exact sign)
+  int degenerate_triangles = 0;        // parametric area == 0
+  int unresolved_equations = 0;        // of the sanitization (0 expected)
+  double max_change = 0;               // largest |rounded - continuous| over corners (quad units)
 };
 
 // mesh: one component; param: its continuous seamless map (T-mesh length units); feature_edges:
@@ -56,7 +56,6 @@ struct RoundingResult {
 // Error(Cancelled) on cancel and Error(InvalidArgument) for malformed input.
 RoundingResult quantize_by_rounding(const TriMesh& mesh, const Parametrization& param,
                                     const std::vector<char>& feature_edges, const TMesh& tmesh,
-                                    const QuantizationOptions& options, const TraceFunction& trace,
-                                    Progress& progress);
+                                    const QuantizationOptions& options, const TraceFunction& trace, Progress& progress);
 
 }  // namespace qgp

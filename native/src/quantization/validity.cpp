@@ -16,8 +16,8 @@ ValidityChecker::ValidityChecker(const CellSystem& system) : sys_(system) {
     const TMeshNode& node = tm.nodes[n];
     // Singularities, feature corners (curve turns, ends, branches, virtual corners) and boundary
     // corners / virtual boundary nodes: every node whose integer position the map must keep.
-    is_singular_[n] = node.singular() || node.kind == TMeshNode::Kind::FeatureCorner ||
-                      node.kind == TMeshNode::Kind::BoundaryNode;
+    is_singular_[n] =
+        node.singular() || node.kind == TMeshNode::Kind::FeatureCorner || node.kind == TMeshNode::Kind::BoundaryNode;
     is_feature_point_[n] = node.on_feature;
     if (is_singular_[n]) sources_.push_back(n);
   }
@@ -177,8 +177,10 @@ void ValidityChecker::visit(const Point& p, int parent, int via_edge, int via_ce
     return;
   }
   trail_.push_back({p, i, parent, via_edge, via_cell});
-  if (new_point_violates(p)) violation_ = index;
-  else stack_.push_back(index);
+  if (new_point_violates(p))
+    violation_ = index;
+  else
+    stack_.push_back(index);
 }
 
 bool ValidityChecker::new_point_violates(const Point& p) {
@@ -221,8 +223,10 @@ void ValidityChecker::explore() {
     const int index = stack_.back();
     stack_.pop_back();
     const Point p = trail_[index].point;
-    if (p.node >= 0) explore_node(index, p.node);
-    else explore_edge_point(index, p);
+    if (p.node >= 0)
+      explore_node(index, p.node);
+    else
+      explore_edge_point(index, p);
   }
 }
 

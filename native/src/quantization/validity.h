@@ -48,9 +48,9 @@ class ValidityChecker {
 
  private:
   struct Point {
-    int node = -1;    // >= 0: a node
-    int edge = -1;    // otherwise a point inside this edge ...
-    int64_t t = 0;    // ... at distance t from its `from` node (0 < t < x)
+    int node = -1;  // >= 0: a node
+    int edge = -1;  // otherwise a point inside this edge ...
+    int64_t t = 0;  // ... at distance t from its `from` node (0 < t < x)
   };
   struct TrailItem {
     Point point;

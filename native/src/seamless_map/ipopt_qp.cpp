@@ -73,8 +73,10 @@ class QPProblem : public Ipopt::TNLP {
     Index k = 0;
     for (Index r = 0; r < m; ++r)
       for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(qp_.constraints, r); it; ++it, ++k) {
-        if (values) values[k] = it.value();
-        else i_row[k] = r, j_col[k] = static_cast<Index>(it.col());
+        if (values)
+          values[k] = it.value();
+        else
+          i_row[k] = r, j_col[k] = static_cast<Index>(it.col());
       }
     return true;
   }
@@ -82,8 +84,10 @@ class QPProblem : public Ipopt::TNLP {
   bool eval_h(Index, const Number*, bool, Number obj_factor, Index, const Number*, bool, Index, Index* i_row,
               Index* j_col, Number* values) override {
     for (size_t k = 0; k < hessian_lower_.size(); ++k) {
-      if (values) values[k] = obj_factor * hessian_lower_[k].value;
-      else i_row[k] = hessian_lower_[k].row, j_col[k] = hessian_lower_[k].col;
+      if (values)
+        values[k] = obj_factor * hessian_lower_[k].value;
+      else
+        i_row[k] = hessian_lower_[k].row, j_col[k] = hessian_lower_[k].col;
     }
     return true;
   }
@@ -169,8 +173,7 @@ QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progre
   o.SetIntegerValue("max_iter", options.max_iterations);
   o.SetNumericValue("tol", options.tolerance);
   // Empty file name: never read an ipopt.opt from the working directory.
-  if (app->Initialize("") != Ipopt::Solve_Succeeded)
-    throw Error(ErrorCode::Internal, "Ipopt could not be initialized");
+  if (app->Initialize("") != Ipopt::Solve_Succeeded) throw Error(ErrorCode::Internal, "Ipopt could not be initialized");
 
   Ipopt::ApplicationReturnStatus status;
   try {
@@ -183,7 +186,10 @@ QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progre
 
   QPResult result = problem->result();
   switch (status) {
-    case Ipopt::Solve_Succeeded: result.status = QPResult::Status::Solved; result.message = "solved"; break;
+    case Ipopt::Solve_Succeeded:
+      result.status = QPResult::Status::Solved;
+      result.message = "solved";
+      break;
     case Ipopt::Solved_To_Acceptable_Level:
       result.status = QPResult::Status::Acceptable;
       result.message = "solved to acceptable level";

@@ -12,12 +12,12 @@
 namespace qgp {
 
 struct SparseQP {
-  Eigen::SparseMatrix<double> hessian;  // n x n, symmetric positive semi-definite (both triangles)
-  Eigen::VectorXd linear;               // n
+  Eigen::SparseMatrix<double> hessian;                       // n x n, symmetric positive semi-definite (both triangles)
+  Eigen::VectorXd linear;                                    // n
   Eigen::SparseMatrix<double, Eigen::RowMajor> constraints;  // m x n
-  Eigen::VectorXd lower;                // m
-  Eigen::VectorXd variable_lower;       // n, or empty: no bounds (-inf entries allowed)
-  Eigen::VectorXd start;                // n: starting point (need not be feasible)
+  Eigen::VectorXd lower;                                     // m
+  Eigen::VectorXd variable_lower;                            // n, or empty: no bounds (-inf entries allowed)
+  Eigen::VectorXd start;                                     // n: starting point (need not be feasible)
 };
 
 struct QPOptions {
@@ -30,9 +30,9 @@ struct QPOptions {
 struct QPResult {
   enum class Status { Solved, Acceptable, IterationLimit, Infeasible, Failed };
   Status status = Status::Failed;
-  Eigen::VectorXd x;      // the last iterate (meaningful unless Failed)
+  Eigen::VectorXd x;  // the last iterate (meaningful unless Failed)
   int iterations = 0;
-  std::string message;    // Ipopt's return status in words
+  std::string message;  // Ipopt's return status in words
 };
 
 // Throws Error(Cancelled) when progress reports a cancel (checked in Ipopt's intermediate

@@ -64,7 +64,7 @@ struct ParametrizationProblem::System {
   std::vector<int> form_var;
   std::vector<double> form_coeff;
   std::vector<double> form_const;
-  SpMat Q;            // objective z^T Q z - 2 c^T z + d2 (energy + penalty)
+  SpMat Q;  // objective z^T Q z - 2 c^T z + d2 (energy + penalty)
   Eigen::VectorXd c;
   double d2 = 0;
   Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky;
@@ -89,8 +89,8 @@ struct ParametrizationProblem::System {
   void assemble_energy(const ParametrizationProblem& problem, bool with_penalty, Progress& progress);
   // Appends the energy's least-squares rows (per face and axis the two gradient components,
   // weighted by sqrt(area)); returns their number.
-  int add_energy_rows(const ParametrizationProblem& problem, std::vector<Triplet>& triplets,
-                      std::vector<double>& rhs, Progress& progress) const;
+  int add_energy_rows(const ParametrizationProblem& problem, std::vector<Triplet>& triplets, std::vector<double>& rhs,
+                      Progress& progress) const;
   // Appends one penalty row per linear constraint from row `row` on; returns the next row.
   int add_penalty_rows(const ParametrizationProblem& problem, int row, std::vector<Triplet>& triplets,
                        std::vector<double>& rhs) const;
@@ -99,8 +99,7 @@ struct ParametrizationProblem::System {
 };
 
 ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
-                                               std::vector<char> is_cut, std::vector<Vec3> frame_u,
-                                               double edge_length)
+                                               std::vector<char> is_cut, std::vector<Vec3> frame_u, double edge_length)
     : mesh_(mesh), rotation_(std::move(rotation)), is_cut_(std::move(is_cut)), edge_length_(edge_length) {
   const int nf = mesh.num_faces(), nc = 3 * nf;
   if (nf == 0 || static_cast<int>(mesh.opposite.size()) != nc)
@@ -114,7 +113,8 @@ ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<
   for (int h = 0; h < nc; ++h) {
     const int o = mesh.opposite[h];
     if (o < 0) {
-      if (rotation_[h] % 4 != 0) throw Error(ErrorCode::InvalidArgument, "parametrization: rotation on a boundary edge");
+      if (rotation_[h] % 4 != 0)
+        throw Error(ErrorCode::InvalidArgument, "parametrization: rotation on a boundary edge");
       is_cut_[mesh.edge_of[h]] = 0;
       continue;
     }
@@ -229,7 +229,8 @@ std::vector<int> ParametrizationProblem::winding_charges(const std::function<Vec
   std::vector<int> charge(mesh_.num_vertices(), 0);
   for (int v = 0; v < mesh_.num_vertices(); ++v) {
     const double off = angle[v] - cone_quarter_turns_[v] * M_PI / 2;
-    if (std::abs(off) > 1.5 * M_PI) charge[v] = static_cast<int>(std::lround(off / (2 * M_PI)));  // a full turn off (with slack)
+    if (std::abs(off) > 1.5 * M_PI)
+      charge[v] = static_cast<int>(std::lround(off / (2 * M_PI)));  // a full turn off (with slack)
   }
   return charge;
 }
@@ -345,7 +346,8 @@ void ParametrizationProblem::System::find_forced_degenerate(const Parametrizatio
   forced_degenerate.assign(nf, 0);
   for (int f = 0; f < nf; ++f) {
     for (int a = 0; a < 2; ++a)
-      if (same_form(wedge_var(3 * f, a), wedge_var(3 * f + 1, a)) && same_form(wedge_var(3 * f, a), wedge_var(3 * f + 2, a)))
+      if (same_form(wedge_var(3 * f, a), wedge_var(3 * f + 1, a)) &&
+          same_form(wedge_var(3 * f, a), wedge_var(3 * f + 2, a)))
         forced_degenerate[f] = 1;
     for (int k = 0; k < 3; ++k) {
       const int c0 = 3 * f + k, c1 = 3 * f + (k + 1) % 3;
@@ -621,8 +623,8 @@ class ParametrizationProblem::Solver {
   // Rotation of face g's ideal shape that best fits its shape in x.
   Vec2 best_fit(const Eigen::VectorXd& x, int g) const;
   // Rotations of the reference shapes of the constrained faces without a valid reference.
-  std::vector<Vec2> reference_rotations(const std::vector<int>& faces, const Eigen::VectorXd& x,
-                                        const Census& cs, bool follow_neighbours) const;
+  std::vector<Vec2> reference_rotations(const std::vector<int>& faces, const Eigen::VectorXd& x, const Census& cs,
+                                        bool follow_neighbours) const;
   // Rotation of bad face f; healthy neighbours join the first layer when it propagates.
   void seed_rotation(int f, const Eigen::VectorXd& x, const Census& cs, bool follow_neighbours,
                      ReferenceRotations& rr) const;
@@ -661,16 +663,16 @@ class ParametrizationProblem::Solver {
   const int nf_, nc_;
   const double pb_, span_;  // the caller's progress range: begin and length
 
-  std::vector<int> vf_start_, vf_;          // vertex -> faces
-  std::vector<Vec2> pinned_rotation_;       // #F, see find_isoline_rotations
-  std::vector<char> iso_halfedge_;          // 3#F: halfedges on isolines
-  Eigen::VectorXd z_;                       // the current pose (free variables)
-  Census current_;                          // its faces
+  std::vector<int> vf_start_, vf_;     // vertex -> faces
+  std::vector<Vec2> pinned_rotation_;  // #F, see find_isoline_rotations
+  std::vector<char> iso_halfedge_;     // 3#F: halfedges on isolines
+  Eigen::VectorXd z_;                  // the current pose (free variables)
+  Census current_;                     // its faces
   // Active set: the variables of a region around the bad faces move; the bad faces and one ring
   // around them are constrained. Faces that turn bad outside the constrained set join it.
   std::vector<char> region_, active_;
-  std::vector<int> rings_;                  // #F per-face ring count (see repair)
-  std::vector<char> touched_;               // faces that were bad at some point
+  std::vector<int> rings_;     // #F per-face ring count (see repair)
+  std::vector<char> touched_;  // faces that were bad at some point
   int first_rings_ = 0, max_rings_ = 0, rounds_ = 1;
 };
 
@@ -770,7 +772,7 @@ void ParametrizationProblem::Solver::find_isoline_rotations() {
       const int a = side == h ? axis : (axis + problem_.rotation_[h]) % 2;
       const Vec2 d = ideal_[TriMesh::next(side)] - ideal_[side];
       const double angle = std::atan2(d.y(), d.x());
-      const double base = a == 0 ? M_PI / 2 : 0.0;  // u constant: the edge runs along v
+      const double base = a == 0 ? M_PI / 2 : 0.0;             // u constant: the edge runs along v
       const double turn = std::remainder(base - angle, M_PI);  // nearest of base, base + pi
       pinned_rotation_[f] += Vec2(std::cos(turn), std::sin(turn));
     }
@@ -944,8 +946,8 @@ void ParametrizationProblem::Solver::repair() {
 // region can unwind): one global solve with every face held in the sectors of its ideal shape in
 // the field's frame (Bommes et al. 2013), elastically; then local repair again.
 bool ParametrizationProblem::Solver::field_frame_solve() {
-  if (current_.bad() == 0 || problem_.cone_quarter_turns_.empty() ||
-      options_.regularity == RegularityMode::AllFaces || !options_.winding_repair)
+  if (current_.bad() == 0 || problem_.cone_quarter_turns_.empty() || options_.regularity == RegularityMode::AllFaces ||
+      !options_.winding_repair)
     return false;
   Census all = current_;
   all.field_frame = true;
@@ -954,8 +956,8 @@ bool ParametrizationProblem::Solver::field_frame_solve() {
   const std::vector<char> every(nf_, 1);
   QPResult::Status status;
   const double t0 = 0.3 + 0.5 * std::min(st_.repair_rounds, rounds_ - 1) / rounds_;
-  const Eigen::VectorXd y = solve_region(every, every, z_, all, kPropagated, pb_ + span_ * t0,
-                                         pb_ + span_ * (t0 + 0.5 / rounds_), &status);
+  const Eigen::VectorXd y =
+      solve_region(every, every, z_, all, kPropagated, pb_ + span_ * t0, pb_ + span_ * (t0 + 0.5 / rounds_), &status);
   ++st_.field_frame_solves;
   Census next = census(y);
   if (!(next.bad() < current_.bad())) return false;
@@ -1001,7 +1003,8 @@ bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track)
     z_ = y;
     current_ = std::move(next);
     track.rejected = 0;
-    if (current_.bad() < track.best.bad() || (current_.bad() == track.best.bad() && current_.depth < track.best.depth)) {
+    if (current_.bad() < track.best.bad() ||
+        (current_.bad() == track.best.bad() && current_.depth < track.best.depth)) {
       track.best = current_;
       track.best_z = z_;
       track.best_round = round;
@@ -1092,9 +1095,8 @@ void ParametrizationProblem::Solver::relinearize() {
 // One Ipopt solve over the variables of the region's corners; every face those variables reach
 // gets tri-sector constraints linearized around its reference triangle (see RepairStrategy).
 Eigen::VectorXd ParametrizationProblem::Solver::solve_region(const std::vector<char>& in_region,
-                                                             const std::vector<char>& active,
-                                                             const Eigen::VectorXd& x, const Census& cs,
-                                                             int strategy, double pb, double pe,
+                                                             const std::vector<char>& active, const Eigen::VectorXd& x,
+                                                             const Census& cs, int strategy, double pb, double pe,
                                                              QPResult::Status* status) {
   const bool follow_neighbours = strategy == kPropagated || strategy == kAllElastic;
   RegionQP rq = select_region(in_region, active);
@@ -1221,8 +1223,10 @@ void ParametrizationProblem::Solver::add_objective(RegionQP& rq, const Eigen::Ve
     double fixed = 0;
     for (SpMat::InnerIterator it(sys_.Q, rq.vars[j]); it; ++it) {
       const int l = rq.local[it.row()];
-      if (l >= 0) ht.emplace_back(l, j, 2 * it.value());
-      else fixed += it.value() * x[it.row()];
+      if (l >= 0)
+        ht.emplace_back(l, j, 2 * it.value());
+      else
+        fixed += it.value() * x[it.row()];
     }
     qp.linear[j] = 2 * (fixed - sys_.c[rq.vars[j]]);
   }
@@ -1234,8 +1238,8 @@ void ParametrizationProblem::Solver::add_objective(RegionQP& rq, const Eigen::Ve
 
 // Current pose if healthy, else the caller's pose if healthy there, else (kUnfold) the current
 // pose unfolded, else the ideal field-aligned shape rotated by `rotation`.
-void ParametrizationProblem::Solver::reference_triangle(int f, const Eigen::VectorXd& x, const Census& cs,
-                                                        int strategy, const Vec2& rotation, Vec2 r[3]) const {
+void ParametrizationProblem::Solver::reference_triangle(int f, const Eigen::VectorXd& x, const Census& cs, int strategy,
+                                                        const Vec2& rotation, Vec2 r[3]) const {
   if (cs.state[f] == kHealthy) {
     for (int k = 0; k < 3; ++k) r[k] = ev_.corner(x, 3 * f + k);
     return;
@@ -1287,7 +1291,8 @@ void ParametrizationProblem::Solver::add_sector_constraints(int f, const Vec2 r[
                                                             const Census& cs, int strategy, RegionQP& rq) const {
   const double ideal_len =
       ((ideal_[3 * f + 1] - ideal_[3 * f]).norm() + (ideal_[3 * f + 2] - ideal_[3 * f + 1]).norm() +
-       (ideal_[3 * f] - ideal_[3 * f + 2]).norm()) / 3;
+       (ideal_[3 * f] - ideal_[3 * f + 2]).norm()) /
+      3;
   Vec2 bound[3];
   sector_bisectors(r, bound);
   for (int k = 0; k < 3; ++k) {
@@ -1306,8 +1311,10 @@ void ParametrizationProblem::Solver::add_sector_constraints(int f, const Vec2 r[
           bound_value -= s * sys_.form_const[v];
           for (int i = sys_.form_start[v]; i < sys_.form_start[v + 1]; ++i) {
             const int gv = sys_.form_var[i];
-            if (rq.local[gv] >= 0) rq.ct.emplace_back(rq.rows, rq.local[gv], s * sys_.form_coeff[i]);
-            else bound_value -= s * sys_.form_coeff[i] * x[gv];
+            if (rq.local[gv] >= 0)
+              rq.ct.emplace_back(rq.rows, rq.local[gv], s * sys_.form_coeff[i]);
+            else
+              bound_value -= s * sys_.form_coeff[i] * x[gv];
           }
         }
       rq.lower.push_back(bound_value);

@@ -53,19 +53,19 @@ struct ParametrizationSolveOptions {
   double penalty_weight = 1e6;                               // lambda of the penalty mode
   RegularityMode regularity = RegularityMode::Repair;
   const Parametrization* reference = nullptr;  // optional pose (same mesh) for linearization
-  double margin = 0.05;           // sector margin, fraction of the face's ideal mean edge length
-  double min_area_ratio = 1e-4;   // faces with parametric / ideal area below this are repaired
-  double elastic_weight = 1e5;    // cost of sector violation of faces without a valid reference
-                                  // (per uv unit, times the face's ideal edge length)
-  int ring_size = 2;              // rings of faces around bad faces whose variables move
-  int max_ring_size = 32;         // a face's rings double while it stays bad, up to this
-  int max_repair_rounds = 24;     // repair rounds (Ipopt solves) before giving up
-  int stagnation_rounds = 8;      // give up after this many rounds without a new best
-  bool winding_repair = true;  // with cone angles: one-rings wound a full turn off their cone are
-                               // bad faces; when the local repair leaves bad faces, one global
-                               // solve in the field's frame, then max_repair_rounds / 2 more rounds
-  int relinearization_rounds = 3;   // at most this many re-linearizations once regular
-  double relinearization_tolerance = 1e-3;  // stop when the energy drops by less (relative)
+  double margin = 0.05;                        // sector margin, fraction of the face's ideal mean edge length
+  double min_area_ratio = 1e-4;                // faces with parametric / ideal area below this are repaired
+  double elastic_weight = 1e5;                 // cost of sector violation of faces without a valid reference
+                                               // (per uv unit, times the face's ideal edge length)
+  int ring_size = 2;                           // rings of faces around bad faces whose variables move
+  int max_ring_size = 32;                      // a face's rings double while it stays bad, up to this
+  int max_repair_rounds = 24;                  // repair rounds (Ipopt solves) before giving up
+  int stagnation_rounds = 8;                   // give up after this many rounds without a new best
+  bool winding_repair = true;                  // with cone angles: one-rings wound a full turn off their cone are
+                                               // bad faces; when the local repair leaves bad faces, one global
+                                               // solve in the field's frame, then max_repair_rounds / 2 more rounds
+  int relinearization_rounds = 3;              // at most this many re-linearizations once regular
+  double relinearization_tolerance = 1e-3;     // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;
   double ipopt_tolerance = 1e-5;
   double progress_begin = 0, progress_end = 1;  // fraction range of the caller's stage
@@ -75,11 +75,11 @@ struct ParametrizationSolveStats {
   int free_variables = 0;
   int flipped_initial = 0, degenerate_initial = 0, thin_initial = 0;  // equality-only optimum
   int flipped = 0, degenerate = 0, thin = 0;                          // final map
-  int winding_defects = 0;     // see ParametrizationProblem::winding_defects (final map)
-  int forced_degenerate = 0;   // faces the hard constraints make degenerate (isolines)
-  double min_area_ratio = 0;   // min over faces of parametric / ideal area
-  double energy = 0;           // field energy of the final map (without penalty)
-  double energy_initial = 0;   // of the equality-only optimum
+  int winding_defects = 0;          // see ParametrizationProblem::winding_defects (final map)
+  int forced_degenerate = 0;        // faces the hard constraints make degenerate (isolines)
+  double min_area_ratio = 0;        // min over faces of parametric / ideal area
+  double energy = 0;                // field energy of the final map (without penalty)
+  double energy_initial = 0;        // of the equality-only optimum
   double constraint_violation = 0;  // max |Cz - b| of the caller's linear constraints
   int ipopt_solves = 0, ipopt_iterations = 0;
   int repair_rounds = 0, relinearizations = 0;
@@ -152,7 +152,7 @@ class ParametrizationProblem {
   std::vector<char> is_cut_;  // #E, including rotated edges
   double edge_length_;
   bool pin_ = true;
-  std::vector<int> cone_quarter_turns_;  // #V expected cone angles, or empty
+  std::vector<int> cone_quarter_turns_;        // #V expected cone angles, or empty
   std::vector<std::pair<int, int>> isolines_;  // (halfedge, axis)
   struct LinearConstraint {
     std::vector<CornerTerm> terms;
@@ -160,11 +160,11 @@ class ParametrizationProblem {
   };
   std::vector<LinearConstraint> constraints_;
 
-  std::vector<int> wedge_of_;    // 3#F
+  std::vector<int> wedge_of_;  // 3#F
   int num_wedges_ = 0;
-  std::vector<int> cut_halfedges_;  // one halfedge (the lower index) per cut edge
-  std::vector<Vec2> ideal_;      // 3#F ideal corner positions (uv units)
-  std::vector<double> ideal_area_;  // #F
+  std::vector<int> cut_halfedges_;               // one halfedge (the lower index) per cut edge
+  std::vector<Vec2> ideal_;                      // 3#F ideal corner positions (uv units)
+  std::vector<double> ideal_area_;               // #F
   std::vector<std::array<double, 6>> gradient_;  // #F: 2x3 gradient operator (row-major) in the frame
 
   // Full turns by which each vertex's one-ring winds off its cone angle (#V; empty without cone

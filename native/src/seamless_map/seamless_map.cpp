@@ -19,7 +19,8 @@ IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, c
     const Vec3 fu = (cut.frame_u[f] - cut.frame_u[f].dot(n) * n).normalized();
     const Vec3 d = mesh.edge_vector(h);
     const double angle = std::atan2(d.dot(n.cross(fu)), d.dot(fu));
-    int q = have_sectors && cut.edge_sector[h] >= 0 ? cut.edge_sector[h] : static_cast<int>(std::lround(angle / (M_PI / 2)));
+    int q = have_sectors && cut.edge_sector[h] >= 0 ? cut.edge_sector[h]
+                                                    : static_cast<int>(std::lround(angle / (M_PI / 2)));
     q = ((q % 4) + 4) % 4;
     double dev = angle - q * M_PI / 2;
     dev = std::remainder(dev, 2 * M_PI);
@@ -27,7 +28,8 @@ IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, c
     return q % 2 == 0 ? 1 : 0;  // q even: the edge runs along u, so v is constant
   };
   std::vector<char> iso(ne, 0);
-  for (int e = 0; e < ne; ++e) iso[e] = mesh.is_boundary_edge(e) || (!field.feature_edge.empty() && field.feature_edge[e]);
+  for (int e = 0; e < ne; ++e)
+    iso[e] = mesh.is_boundary_edge(e) || (!field.feature_edge.empty() && field.feature_edge[e]);
   IsolineSelection out;
   // A triangle cannot have two isoline edges of one axis (its three corners would share that
   // coordinate): drop the worse aligned edge of such a pair (e.g. the third feature edge of a
@@ -85,12 +87,14 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   IsolineSelection iso = select_isolines(mesh, field, cut);
   std::unique_ptr<ParametrizationProblem> problem;
   for (int attempt = 0;; ++attempt) {
-    problem = std::make_unique<ParametrizationProblem>(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
+    problem =
+        std::make_unique<ParametrizationProblem>(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
     for (const Isoline& line : iso.isolines) problem->add_isoline(line.halfedge, line.axis);
     const std::vector<int> forced = problem->forced_degenerate_faces(progress);
     if (forced.empty() || attempt == 8) break;
     std::vector<int> isoline_of_edge(ne, -1);
-    for (size_t i = 0; i < iso.isolines.size(); ++i) isoline_of_edge[mesh.edge_of[iso.isolines[i].halfedge]] = static_cast<int>(i);
+    for (size_t i = 0; i < iso.isolines.size(); ++i)
+      isoline_of_edge[mesh.edge_of[iso.isolines[i].halfedge]] = static_cast<int>(i);
     std::vector<char> drop(iso.isolines.size(), 0);
     bool any = false;
     for (int f : forced) {
@@ -104,8 +108,10 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
     if (!any) break;
     std::vector<Isoline> kept;
     for (size_t i = 0; i < iso.isolines.size(); ++i) {
-      if (drop[i]) iso.dropped.push_back(mesh.edge_of[iso.isolines[i].halfedge]);
-      else kept.push_back(iso.isolines[i]);
+      if (drop[i])
+        iso.dropped.push_back(mesh.edge_of[iso.isolines[i].halfedge]);
+      else
+        kept.push_back(iso.isolines[i]);
     }
     iso.isolines.swap(kept);
   }

@@ -12,8 +12,8 @@
 namespace qgp {
 
 struct SeamlessMapOptions {
-  double edge_length = 1;  // target quad edge length in model units: 1 uv unit = edge_length
-  bool regularity = true;  // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
+  double edge_length = 1;      // target quad edge length in model units: 1 uv unit = edge_length
+  bool regularity = true;      // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
   int max_repair_rounds = 24;  // Ipopt repair rounds at most (see ParametrizationSolveOptions)
   bool winding_repair = true;  // see ParametrizationSolveOptions
 };
@@ -28,15 +28,15 @@ struct SeamlessMapStats {
   int ipopt_iterations = 0;
   // Details:
   int flipped_before_ipopt = 0, degenerate_before_ipopt = 0;  // equality-only optimum
-  int forced_degenerate = 0;      // made degenerate by the isoline constraints alone (0 expected)
-  int isoline_edges = 0;          // feature + boundary edges constrained to isolines
-  int dropped_isolines = 0;       // feature edges left free (see select_isolines)
+  int forced_degenerate = 0;  // made degenerate by the isoline constraints alone (0 expected)
+  int isoline_edges = 0;      // feature + boundary edges constrained to isolines
+  int dropped_isolines = 0;   // feature edges left free (see select_isolines)
   std::vector<int> dropped_isoline_edges;
   int ipopt_solves = 0;
-  int repair_rounds = 0;          // Ipopt repair rounds (0: the Cholesky optimum was regular)
-  int field_frame_solves = 0;     // global solves in the field frame after a failed local repair
-  int max_region_faces = 0;       // most faces constrained in one Ipopt solve
-  double min_area_ratio = 0;      // min parametric / ideal (field-aligned) triangle area
+  int repair_rounds = 0;       // Ipopt repair rounds (0: the Cholesky optimum was regular)
+  int field_frame_solves = 0;  // global solves in the field frame after a failed local repair
+  int max_region_faces = 0;    // most faces constrained in one Ipopt solve
+  double min_area_ratio = 0;   // min parametric / ideal (field-aligned) triangle area
   double seconds_cholesky = 0, seconds_ipopt = 0;
 };
 // Report object `seamless.components[i]`.
@@ -54,9 +54,9 @@ struct SeamlessMap {
 // (degenerate); compute_seamless_map drops further edges whose isolines force a triangle to
 // collapse.
 struct Isoline {
-  int halfedge = 0;           // face(halfedge)'s chart
-  int axis = 0;               // coordinate constant along the edge: 0 = u, 1 = v
-  double misalignment = 0;    // radians between the edge and its isoline direction in the field
+  int halfedge = 0;         // face(halfedge)'s chart
+  int axis = 0;             // coordinate constant along the edge: 0 = u, 1 = v
+  double misalignment = 0;  // radians between the edge and its isoline direction in the field
 };
 struct IsolineSelection {
   std::vector<Isoline> isolines;

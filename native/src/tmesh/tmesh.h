@@ -21,7 +21,7 @@ namespace qgp {
 // interior feature curve (total angle q != 4 quarter turns) numbers them 0..q-1 modulo q.
 struct TMeshIncidence {
   int edge = -1;
-  int direction = 0;   // in the node's frame
+  int direction = 0;     // in the node's frame
   bool outgoing = true;  // true: the edge's positive direction points away from this node
 };
 
@@ -52,8 +52,8 @@ struct TMeshEdge {
   // from either end: it keeps from = where it starts negatively in trace[0]'s chart and runs
   // positively in the chart of its last piece. Use the incidences' local directions (and the
   // trace's chart coordinates) for anything local.
-  double length = 0;       // continuous parametric length (ideal length at scale 1), >= 0
-  bool on_feature = false; // part of a feature curve or of the boundary
+  double length = 0;                 // continuous parametric length (ideal length at scale 1), >= 0
+  bool on_feature = false;           // part of a feature curve or of the boundary
   std::array<int, 2> cells{-1, -1};  // cell on the left / right of the edge (-1: boundary)
   // Path on the surface from `from` to `to`. Consecutive points either lie in the same face
   // (a straight piece inside that triangle, both given in that face's chart) or are the same

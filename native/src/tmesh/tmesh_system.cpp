@@ -43,7 +43,8 @@ TMeshCheck check_tmesh(const TMesh& tmesh) {
       for (int e : cell.sides[pair]) a += tmesh.edges[e].length;
       for (int e : cell.sides[pair + 2]) b += tmesh.edges[e].length;
       const double scale = std::max(a, b);
-      if (scale > 0) check.max_cell_equation_residual = std::max(check.max_cell_equation_residual, std::fabs(a - b) / scale);
+      if (scale > 0)
+        check.max_cell_equation_residual = std::max(check.max_cell_equation_residual, std::fabs(a - b) / scale);
     }
   }
   const TMeshCellSystem sys = tmesh_cell_system(tmesh);

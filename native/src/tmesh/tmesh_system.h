@@ -23,12 +23,12 @@ struct TMeshCellSystem {
 TMeshCellSystem tmesh_cell_system(const TMesh& tmesh);
 
 struct TMeshCheck {
-  int singular_nodes = 0;        // nodes with index != 0
+  int singular_nodes = 0;  // nodes with index != 0
   int t_junctions = 0;
   int cells_not_four_sided = 0;
   double max_cell_equation_residual = 0;  // max over cells of |sum0 - sum2| / max(sum0, sum2), same for 1/3
-  int max_abs_coefficient = 0;   // of A (1 for a proper T-mesh)
-  int edges_without_cells = 0;   // interior edges missing a cell on one side, boundary edges on both
+  int max_abs_coefficient = 0;            // of A (1 for a proper T-mesh)
+  int edges_without_cells = 0;            // interior edges missing a cell on one side, boundary edges on both
 };
 TMeshCheck check_tmesh(const TMesh& tmesh);
 

@@ -38,13 +38,13 @@ long double rational_difference(const Rational& x, const Rational& y) {
 
 // A T-mesh edge under construction: a path between two nodes.
 struct Piece {
-  int a = -1, b = -1;           // end nodes; points run from a to b
-  int dir_a = 0, dir_b = 0;     // direction numbers at a (towards b) and at b (towards a)
+  int a = -1, b = -1;        // end nodes; points run from a to b
+  int dir_a = 0, dir_b = 0;  // direction numbers at a (towards b) and at b (towards a)
   std::vector<SurfacePoint> points;
   double length = 0;
   int first_dir = 0, last_dir = 0;  // direction a -> b in the charts of points.front()/back()
   bool wall = false;
-  bool left_ok[2] = {true, true};   // a cell lies left of a -> b [0] / b -> a [1]
+  bool left_ok[2] = {true, true};  // a cell lies left of a -> b [0] / b -> a [1]
   bool alive = true;
 
   void reverse() {
@@ -131,7 +131,8 @@ class Assembler {
     const VertexStar& s = tracer_.stars()[v];
     for (size_t i = 0; i < s.ring.size(); ++i)
       if (mesh_.edge_of[s.ring[i].h_out] == e) return s.wall_number[i];
-    if (s.boundary && !s.ring.empty() && mesh_.edge_of[TriMesh::prev(s.ring.back().h_out)] == e) return s.end_wall_number;
+    if (s.boundary && !s.ring.empty() && mesh_.edge_of[TriMesh::prev(s.ring.back().h_out)] == e)
+      return s.end_wall_number;
     return INT_MIN;
   }
 
@@ -141,7 +142,7 @@ class Assembler {
     std::map<int, std::vector<std::pair<Rational, int>>> on_edge;  // wall edge -> (lambda, node)
     std::vector<int> vertex_node;                                  // mesh vertex -> node or -1
     std::vector<std::vector<int>> wall_edges_at;                   // mesh vertex -> wall edges
-    std::vector<std::vector<char>> visited;  // wall edge -> sub-intervals between its nodes
+    std::vector<std::vector<char>> visited;                        // wall edge -> sub-intervals between its nodes
   };
 
   // One walk along a wall: the piece under construction and the current atom (sub-interval k of
@@ -269,7 +270,7 @@ class Assembler {
         p.left_ok[1] = !increasing;
       }
       const int ds = nodes[start].key.type == PointKey::Vertex ? wall_number_at_vertex(nodes[start].key.id, e)
-                                                                 : tracer_.node_direction(start, face, dir);
+                                                               : tracer_.node_direction(start, face, dir);
       p.dir_a = ds;
     }
     walk.first_atom = false;
@@ -298,7 +299,8 @@ class Assembler {
     int e2 = -1;
     for (int cand : w.wall_edges_at[x])
       if (cand != e) e2 = cand;
-    if (w.wall_edges_at[x].size() != 2 || e2 < 0) fail("internal: wall vertex " + std::to_string(x) + " is no node but not straight");
+    if (w.wall_edges_at[x].size() != 2 || e2 < 0)
+      fail("internal: wall vertex " + std::to_string(x) + " is no node but not straight");
     walk.prev_vertex = x;
     walk.prev_face = hc / 3;
     walk.e = e2;
@@ -426,9 +428,10 @@ class Assembler {
         out.on_feature = s.on_wall;
         if (s.corner) {
           out.index = s.seed ? 0 : s.index;
-          out.kind = s.seed ? TMeshNode::Kind::Seed
-                            : !s.on_wall ? TMeshNode::Kind::Singularity
-                                         : s.boundary ? TMeshNode::Kind::BoundaryNode : TMeshNode::Kind::FeatureCorner;
+          out.kind = s.seed       ? TMeshNode::Kind::Seed
+                     : !s.on_wall ? TMeshNode::Kind::Singularity
+                     : s.boundary ? TMeshNode::Kind::BoundaryNode
+                                  : TMeshNode::Kind::FeatureCorner;
           continue;
         }
       } else if (key.type == PointKey::Edge) {
@@ -447,7 +450,9 @@ class Assembler {
     std::vector<int> period(tm.nodes.size(), 4);
     std::vector<char> chart_frame(tm.nodes.size(), 1);
     for (size_t n = 0; n < node_id.size(); ++n)
-      if (node_id[n] >= 0) period[node_id[n]] = node_period(static_cast<int>(n)), chart_frame[node_id[n]] = node_chart_frame(static_cast<int>(n));
+      if (node_id[n] >= 0)
+        period[node_id[n]] = node_period(static_cast<int>(n)),
+        chart_frame[node_id[n]] = node_chart_frame(static_cast<int>(n));
     std::vector<char> exists(2 * ne, 1), visited(2 * ne, 0);
     {
       int id = 0;

@@ -58,7 +58,9 @@ struct Rational {
   Rational() = default;
   Rational(i128 n) : num(n), den(1) {}  // NOLINT: integers convert implicitly
   Rational(i128 n, i128 d) : num(d < 0 ? -n : n), den(d < 0 ? -d : d) {}
-  double to_double() const { return static_cast<double>(static_cast<long double>(num) / static_cast<long double>(den)); }
+  double to_double() const {
+    return static_cast<double>(static_cast<long double>(num) / static_cast<long double>(den));
+  }
   Rational reduced() const {
     const i128 g = gcd128(num, den);
     return g > 1 ? Rational(num / g, den / g) : *this;
@@ -89,7 +91,7 @@ inline P2 cardinal(int d) {
     default: return {0, -1};
   }
 }
-inline int axis_of(int d) { return d & 1; }          // moving coordinate of direction d
+inline int axis_of(int d) { return d & 1; }              // moving coordinate of direction d
 inline int fixed_axis_of(int d) { return 1 - (d & 1); }  // coordinate that stays constant
 inline int sense_of(int d) { return (d & 3) < 2 ? 1 : -1; }
 

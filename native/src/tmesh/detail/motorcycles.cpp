@@ -65,7 +65,9 @@ MotorcycleTracer::MotorcycleTracer(const TriMesh& mesh, const ExactParametrizati
   face_records_.resize(nf);
 }
 
-void MotorcycleTracer::fail(const std::string& message) const { throw Error(ErrorCode::StageFailed, "T-mesh tracing: " + message); }
+void MotorcycleTracer::fail(const std::string& message) const {
+  throw Error(ErrorCode::StageFailed, "T-mesh tracing: " + message);
+}
 
 P2 MotorcycleTracer::transfer(int h, const P2& p) const {
   const P2 r = rotate_quarter(p, param_.rotation[h]);
@@ -224,7 +226,8 @@ int MotorcycleTracer::new_segment(Segment s) {
 void MotorcycleTracer::plan_in_corner(int m, int v, int corner, int dir, const P2& origin, const Rational& t0) {
   const StarCorner& k = stars_[v].ring[corner];
   const int g = k.face, h = k.h_out;
-  if (!face_ok_[g]) fail("a separatrix entered face " + std::to_string(g) + ", which is flipped or degenerate in parameter space");
+  if (!face_ok_[g])
+    fail("a separatrix entered face " + std::to_string(g) + ", which is flipped or degenerate in parameter space");
   Segment s;
   s.moto = m;
   s.t0 = t0;
@@ -246,7 +249,8 @@ void MotorcycleTracer::plan_in_corner(int m, int v, int corner, int dir, const P
     s.end_halfedge = TriMesh::next(h);
     s.t1 = s.time_at(crossing(pa, pb, fixed, c));
   }
-  if (compare(s.t1, t0) <= 0) fail("a separatrix does not advance in face " + std::to_string(g) + " (non-injective parametrization)");
+  if (compare(s.t1, t0) <= 0)
+    fail("a separatrix does not advance in face " + std::to_string(g) + " (non-injective parametrization)");
   new_segment(s);
 }
 
@@ -281,7 +285,8 @@ void MotorcycleTracer::plan_from_edge(int m, const Segment& prev) {
   const int o = mesh_.opposite[k];
   if (o < 0) fail("internal: separatrix left the surface through a boundary edge");
   const int g = o / 3;
-  if (!face_ok_[g]) fail("a separatrix entered face " + std::to_string(g) + ", which is flipped or degenerate in parameter space");
+  if (!face_ok_[g])
+    fail("a separatrix entered face " + std::to_string(g) + ", which is flipped or degenerate in parameter space");
   if (param_.is_cut[mesh_.edge_of[k]]) ++stats_.cut_crossings;
   Segment s;
   s.moto = m;
@@ -514,8 +519,7 @@ PointKey MotorcycleTracer::classify(int face, int fixed, int64_t c, const Ration
         on_edge = true;
         lambda = Rational(s.num - i128(p[moving]) * s.den, s.den * (i128(q[moving]) - p[moving]));
       }
-    } else if (sign(i128(p[fixed]) - c) * sign(i128(q[fixed]) - c) < 0 &&
-               compare(crossing(p, q, fixed, c), s) == 0) {
+    } else if (sign(i128(p[fixed]) - c) * sign(i128(q[fixed]) - c) < 0 && compare(crossing(p, q, fixed, c), s) == 0) {
       on_edge = true;
       lambda = Rational(i128(c) - p[fixed], i128(q[fixed]) - p[fixed]);
     }
@@ -550,8 +554,7 @@ int MotorcycleTracer::node_direction(int node, int face, int dir) const {
       if (o >= 0 && face == o / 3) return (dir + param_.rotation[o]) & 3;
       return INT_MIN;
     }
-    default:
-      return face == rec.key.id ? (dir & 3) : INT_MIN;
+    default: return face == rec.key.id ? (dir & 3) : INT_MIN;
   }
 }
 

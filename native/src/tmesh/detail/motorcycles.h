@@ -47,10 +47,10 @@ struct NodeRecord {
 // registered for collisions in both).
 struct Segment {
   int moto = -1;
-  Rational t0, t1;        // travel times at start / end
+  Rational t0, t1;  // travel times at start / end
   int face = -1;
-  int dir = 0;            // travel direction in the face's chart
-  P2 origin{};            // the motorcycle's source transported into this chart (on the line)
+  int dir = 0;              // travel direction in the face's chart
+  P2 origin{};              // the motorcycle's source transported into this chart (on the line)
   int along_halfedge = -1;  // halfedge of `face` the piece runs along, or -1
   int start_vertex = -1, end_vertex = -1;
   int end_halfedge = -1;  // halfedge of `face` through whose edge it leaves, or -1
@@ -69,8 +69,8 @@ struct Segment {
 
 struct Motorcycle {
   int source_vertex = -1;
-  int source_number = 0;           // direction number in the source's vertex frame
-  std::vector<int> segments;       // in travel order
+  int source_number = 0;      // direction number in the source's vertex frame
+  std::vector<int> segments;  // in travel order
   bool stopped = false;
   Rational stop_time;
   std::map<Rational, int, RationalLess> junctions;  // travel time -> node on the trail
@@ -78,16 +78,16 @@ struct Motorcycle {
 
 struct TraceStats {
   int motorcycles = 0;
-  long long steps = 0;           // face-to-face advances
-  int head_on = 0;               // motorcycles meeting head-on at one point and time
-  int crossings = 0;             // perpendicular simultaneous crossings
-  int vertex_passes = 0;         // passes through a mesh vertex
-  int edge_runs = 0;             // pieces running exactly along a mesh edge
-  int cut_crossings = 0;         // crossings of cut edges (transition applied)
-  int cut_vertex_passes = 0;     // passes through a vertex whose one-ring is cut
-  int virtual_corners = 0;       // closed walls without a corner got one
+  long long steps = 0;        // face-to-face advances
+  int head_on = 0;            // motorcycles meeting head-on at one point and time
+  int crossings = 0;          // perpendicular simultaneous crossings
+  int vertex_passes = 0;      // passes through a mesh vertex
+  int edge_runs = 0;          // pieces running exactly along a mesh edge
+  int cut_crossings = 0;      // crossings of cut edges (transition applied)
+  int cut_vertex_passes = 0;  // passes through a vertex whose one-ring is cut
+  int virtual_corners = 0;    // closed walls without a corner got one
   int seeds = 0;
-  int walls_not_isolines = 0;    // feature/boundary edges whose corners share neither u nor v
+  int walls_not_isolines = 0;  // feature/boundary edges whose corners share neither u nor v
 };
 
 class MotorcycleTracer {
@@ -141,9 +141,9 @@ class MotorcycleTracer {
     Rational time;
     int kind = Exit;
     long long seq = 0;
-    int a = -1, b = -1;   // Stop: a = later (stops), b = earlier; Meet: both; Exit: a = moto
-    Rational ta, tb;      // times of a and b at the point
-    int segment = -1;     // Exit: the segment that ends
+    int a = -1, b = -1;  // Stop: a = later (stops), b = earlier; Meet: both; Exit: a = moto
+    Rational ta, tb;     // times of a and b at the point
+    int segment = -1;    // Exit: the segment that ends
     PointRef point;
   };
   struct EventAfter {
@@ -172,9 +172,7 @@ class MotorcycleTracer {
   void stop(int m, const Rational& t, int node);
   bool add_junction(int m, const Rational& t, int node);  // true if new
   int node_for(const PointRef& p);
-  bool alive_at(int m, const Rational& t) const {
-    return !motos_[m].stopped || compare(motos_[m].stop_time, t) >= 0;
-  }
+  bool alive_at(int m, const Rational& t) const { return !motos_[m].stopped || compare(motos_[m].stop_time, t) >= 0; }
 
   const TriMesh& mesh_;
   const ExactParametrization& param_;
@@ -182,9 +180,9 @@ class MotorcycleTracer {
   long long max_steps_;
   Progress& progress_;
   int fraction_bits_ = 0;
-  std::vector<P2> uv2_;            // 3#F doubled corner coordinates
-  std::vector<P2> translation2_;   // 3#F doubled translations
-  std::vector<char> face_ok_;      // positive parametric orientation
+  std::vector<P2> uv2_;           // 3#F doubled corner coordinates
+  std::vector<P2> translation2_;  // 3#F doubled translations
+  std::vector<char> face_ok_;     // positive parametric orientation
   std::vector<VertexStar> stars_;
   std::vector<Segment> segments_;
   std::vector<Motorcycle> motos_;

@@ -53,7 +53,8 @@ void walk_ring(const TriMesh& mesh, const std::vector<P2>& uv2, const std::vecto
     c.orient = sign(cross(c.e1, c.e2));
     c.rot_to_next = rotation[TriMesh::prev(h)] & 3;
     if (c.orient <= 0) star.positive = false;
-    if ((c.e1[0] == 0 && c.e1[1] == 0) || (c.e2[0] == 0 && c.e2[1] == 0)) star.problem = "zero-length edge in parameter space";
+    if ((c.e1[0] == 0 && c.e1[1] == 0) || (c.e2[0] == 0 && c.e2[1] == 0))
+      star.problem = "zero-length edge in parameter space";
     if (wall_edge[mesh.edge_of[h]]) star.on_wall = true;
     star.ring.push_back(c);
     const int hn = mesh.rotate_ccw(h);

@@ -32,20 +32,20 @@ struct StarDirection {
 struct VertexStar {
   std::vector<StarCorner> ring;  // counter-clockwise; on the boundary from the boundary halfedge
   bool boundary = false;
-  bool on_wall = false;          // incident to a feature or boundary edge
-  bool positive = true;          // every corner of the ring has positive parametric orientation
-  int holonomy = 0;              // sum of transition rotations around an interior vertex (mod 4)
-  int quarter_turns = 0;         // total parametric angle (sectors rounded to walls on features)
-  int index = 0;                 // 4 - quarter_turns inside, 2 - quarter_turns on the boundary
+  bool on_wall = false;   // incident to a feature or boundary edge
+  bool positive = true;   // every corner of the ring has positive parametric orientation
+  int holonomy = 0;       // sum of transition rotations around an interior vertex (mod 4)
+  int quarter_turns = 0;  // total parametric angle (sectors rounded to walls on features)
+  int index = 0;          // 4 - quarter_turns inside, 2 - quarter_turns on the boundary
   // Frame of node incidences: false = chart directions 0..3 of ring[0]'s face (regular vertex);
   // true = sector numbers counter-clockwise (period > 0: modulo period; period 0: linear, on the
   // boundary, from the first boundary edge).
   bool sector_frame = false;
   int period = 4;
-  bool corner = false;         // a T-mesh node from the start (singular, feature/boundary corner)
-  bool straight_wall = false;  // on a wall, but the wall passes straight (not a corner)
-  bool virtual_corner = false; // straight wall vertex made a corner (closed wall without corners)
-  bool seed = false;           // regular vertex chosen as start where nothing else emits
+  bool corner = false;                    // a T-mesh node from the start (singular, feature/boundary corner)
+  bool straight_wall = false;             // on a wall, but the wall passes straight (not a corner)
+  bool virtual_corner = false;            // straight wall vertex made a corner (closed wall without corners)
+  bool seed = false;                      // regular vertex chosen as start where nothing else emits
   std::vector<StarDirection> directions;  // every cardinal direction in the corners, CCW
   std::vector<int> emissions;             // indices into directions: separatrix starts
   std::vector<int> wall_number;           // per corner: frame number of e1 if it is a wall, else INT_MIN
