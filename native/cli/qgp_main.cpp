@@ -151,14 +151,14 @@ std::vector<std::array<int, 2>> read_feature_pairs(const std::string& path) {
   return pairs;
 }
 
-void write_report(const std::string& path, const qgp::Json& report) {
-  if (path.empty()) return;
+// Writes the report to `path` (none if empty); false if it cannot be written.
+bool write_report(const std::string& path, const qgp::Json& report) {
+  if (path.empty()) return true;
   std::ofstream out(path);
-  if (!out) {
-    std::cerr << "qgp: cannot write report '" << path << "'\n";
-    return;
-  }
-  out << report.dump(2) << "\n";
+  if (out) out << report.dump(2) << "\n";
+  if (out) return true;
+  std::cerr << "qgp: cannot write report '" << path << "'\n";
+  return false;
 }
 
 void print_intake_summary(const qgp::Json& report) {
@@ -298,7 +298,7 @@ int run(const CommandLine& cl) {
     print_remesh_summary(report);
   }
   written = write_optional_outputs(cl, session.get(), false) && written;
-  write_report(cl.report, report);
+  written = write_report(cl.report, report) && written;
   return written ? 0 : 1;
 }
 

@@ -1,9 +1,9 @@
 #!/usr/bin/python3
 """Every `qgp` option and exit code, as a batch user meets them.
 
-Exit codes: 0 success, 1 bad command line (or a features file that says nothing usable), 2 unusable
-input (also with --uv-out / --layout-out asked), 3 a stage failed. Outputs are read back: the -o
-quad mesh (only quads, edge-manifold, the input's Euler characteristic, as many faces as the report
+Exit codes: 0 success, 1 bad command line, a features file that says nothing usable or an output
+that cannot be written, 2 unusable input (also with --uv-out / --layout-out asked), 3 a stage
+failed. Outputs are read back: the -o quad mesh (only quads, edge-manifold, the input's Euler characteristic, as many faces as the report
 says), the --layout-out polylines (one per T-edge), features from --sharp-angle and --features
 (counted here independently from the input's dihedral angles), --edge-length, --quantizer and
 --drop-bad-components.
@@ -133,6 +133,12 @@ def test_remesh_outputs(qgp, meshes, tmp):
     check(len(vertices) - len(edges) + len(faces) == 2, "-o: Euler characteristic 2, as spot's")
     _, _, lines = read_obj(layout)
     check(len(lines) == r["tmesh"]["edges"], f"--layout-out: one polyline per T-edge ({len(lines)})")
+    # An output that cannot be written (here the report, in a missing folder): exit 1, the quads written.
+    out2 = os.path.join(tmp, "spot2.obj")
+    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", out2, "--faces", 500,
+               "--report", os.path.join(tmp, "missing", "r.json"))
+    check(proc.returncode == 1 and "cannot write report" in proc.stderr and os.path.exists(out2),
+          "unwritable --report: exit 1 with the reason, the quads still written")
 
 
 def test_edge_length(qgp, meshes, tmp):

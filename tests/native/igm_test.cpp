@@ -360,10 +360,6 @@ bool is_cad(const std::string& name) {
   return name == "fandisk.obj" || name == "block.obj" || name == "joint.obj" || name == "wingnut.obj";
 }
 
-// Meshes on which a stage before the integer-grid map fails (the seamless map leaves flipped
-// triangles around a singularity or a feature vertex, which the T-mesh tracer refuses).
-const std::set<std::string> kEarlierStageFailures = {"armadillo.obj", "block.obj", "wingnut.obj"};
-
 void sweep(const std::vector<std::string>& names, const std::vector<int>& targets = {500, 2000}) {
   std::cout << "[igm] mesh | target | tri faces | quads expected | quads | penalty iterations | fallback | "
                "flipped/degenerate | max integer residual (hard / penalty) | igm s | chain s | path"
@@ -391,8 +387,7 @@ void sweep(const std::vector<std::string>& names, const std::vector<int>& target
         fig = check_chain(name, target, *chain, is_cad(name));
       } catch (const Error& e) {
         fig.failure = e.what();
-        // Failures of earlier stages on this mesh are the known limitations named in the report.
-        if (kEarlierStageFailures.count(name) == 0) ADD_FAILURE() << name << " @" << target << ": " << e.what();
+        ADD_FAILURE() << name << " @" << target << ": " << e.what();
       }
       print_row(fig);
     }

@@ -27,6 +27,21 @@ double one_sided_distance(const TriMesh& from, const TriMesh& to) {
   return max_distance(samples, TriangleBvh(to), progress) / from.bounding_box_diagonal();
 }
 
+// Mean edge length of `mesh`, relative to its diagonal.
+double mean_edge_length(const TriMesh& mesh) {
+  double sum = 0;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const int h = mesh.edge_halfedge[e];
+    sum += (mesh.position(mesh.to(h)) - mesh.position(mesh.from(h))).norm();
+  }
+  return sum / std::max(1, mesh.num_edges()) / mesh.bounding_box_diagonal();
+}
+
+// How many input edge lengths the working mesh may move the surface. One, except dragon-genus1: a
+// noisy scan with one-triangle spikes that the decimation removes (measured 5.5 edges, 2.6 % of the
+// diagonal).
+double allowed_distance_in_edges(const std::string& name) { return name == "dragon-genus1.obj" ? 6 : 1; }
+
 class WorkingMeshOverMeshes : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(WorkingMeshOverMeshes, KeepsTopologyFeaturesAndShape) {
@@ -82,12 +97,15 @@ TEST_P(WorkingMeshOverMeshes, KeepsTopologyFeaturesAndShape) {
   }
   for (char f : w.feature_edges) working_features += f;
   EXPECT_EQ(working_features, input_features) << name;
-  // The shape: both ways within 3% of the diagonal at a quarter of the faces (dragon's spikes:
-  // 2.6%; smooth scans a tenth of that).
+  // The shape: at a quarter of the faces the working edges are about twice the input's, and the
+  // surface moves less than one input edge length both ways (a mesh-relative bound: smooth scans
+  // move a tenth of a percent of the diagonal).
   const double to_working = one_sided_distance(mesh, w.mesh), to_input = one_sided_distance(w.mesh, mesh);
-  std::cout << name << ": distance input -> working " << to_working << ", working -> input " << to_input << std::endl;
-  EXPECT_LT(to_working, 0.03) << name;
-  EXPECT_LT(to_input, 0.03) << name;
+  const double edge = mean_edge_length(mesh);
+  std::cout << name << ": distance input -> working " << to_working << ", working -> input " << to_input
+            << " (input mean edge " << edge << ")" << std::endl;
+  EXPECT_LT(to_working, allowed_distance_in_edges(name) * edge) << name;
+  EXPECT_LT(to_input, allowed_distance_in_edges(name) * edge) << name;
 }
 
 TEST_P(WorkingMeshOverMeshes, IsTheInputBelowTheBudget) {
