@@ -3,7 +3,8 @@ refined copy where only that has a flip-free map).
 
 Both run synchronously in execute() (scripts, redo panel, blender -b) and as modal jobs from
 invoke() (progress bar, status text, Esc cancels). The native sessions live in worker processes
-(core/worker.py), so a fault under the native code is a reported error, not a closed Blender. The
+(core/worker.py), so a fault under the native code is a reported error, not a closed Blender; when
+no worker can start, the job runs inside Blender and the operator reports why as a warning. The
 source object is only ever changed by a successful Integer-Grid UVs run.
 """
 import math
@@ -16,7 +17,8 @@ from .core import binding, worker
 from .prefs import preferences
 
 # Native sessions per object: reused when only the density changes (re-quantization only, up to
-# 4x in quad count; beyond, the native session solves the seamless map again).
+# 4x in quad count; beyond, the native session solves the seamless map again). Each entry:
+# (settings, session, why the worker could not start or None; see _new_session).
 _session_cache = {}
 
 
@@ -27,33 +29,40 @@ def _load_library(context):
 
 
 def _new_session(source, isolate):
-    """A worker-process session (a native fault cannot end Blender), or an in-process one when
-    isolation is off or no worker can start."""
+    """(session, fallback): a worker-process session (a native fault cannot end Blender), or an
+    in-process one when isolation is off or no worker can start. fallback is None, or, when the
+    worker was wanted but could not start, why (the operators report it as a warning)."""
     if isolate:
         try:
-            return worker.WorkerSession(source.vertices, source.triangles)
+            return worker.WorkerSession(source.vertices, source.triangles), None
         except worker.WorkerStartError as e:
-            print(f"Quantized Retopo: {e.message}; running the native job inside Blender")
-    return binding.Session(source.vertices, source.triangles)
+            return binding.Session(source.vertices, source.triangles), e.message
+    return binding.Session(source.vertices, source.triangles), None
+
+
+def _fallback_warning(fallback):
+    return (f"The native job runs inside Blender, where a fault in it can close Blender: the separate "
+            f"process could not start ({fallback})")
 
 
 def _session_for(obj, source, sharp_angle, isolate):
-    """A native session for this geometry and feature setup, cached per object: quad remesh and
-    grid UVs share its stages, and a new density only re-quantizes (up to 4x)."""
+    """(session, fallback) for this geometry and feature setup, cached per object: quad remesh and
+    grid UVs share its stages, and a new density only re-quantizes (up to 4x). A cached in-process
+    fallback keeps its reason: every job it runs is reported."""
     key = obj.name
     settings = (source.fingerprint(), sharp_angle, isolate)
     cached = _session_cache.get(key)
     if cached and cached[0] == settings and cached[1].alive:  # a dead worker is replaced
-        return cached[1]
+        return cached[1], cached[2]
     if cached:
         cached[1].close()
         del _session_cache[key]
-    session = _new_session(source, isolate)
+    session, fallback = _new_session(source, isolate)
     if len(source.features):
         session.set_features(source.features)
     session.set_option("sharp_angle", sharp_angle)
-    _session_cache[key] = (settings, session)
-    return session
+    _session_cache[key] = (settings, session, fallback)
+    return session, fallback
 
 
 def _report_figures(report, op, started, **figures):
@@ -184,7 +193,9 @@ class _TargetProperties:
             raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
         angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
         prefs = preferences(context)
-        session = _session_for(self._source_obj, self._source, angle, prefs.isolate if prefs else True)
+        session, fallback = _session_for(self._source_obj, self._source, angle, prefs.isolate if prefs else True)
+        if fallback:
+            self.report({"WARNING"}, _fallback_warning(fallback))
         if self.target_mode == "FACES":
             session.set_option("target_faces", self.target_faces)
         else:
@@ -349,6 +360,6 @@ def register():
 def unregister():
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
-    for _, session in _session_cache.values():
+    for _, session, _ in _session_cache.values():
         session.close()
     _session_cache.clear()

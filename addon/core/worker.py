@@ -3,7 +3,9 @@
 A fault inside the native code or a library under it (a segfault, MUMPS calling abort) ends the
 child, not Blender: the call that was waiting on it raises QGPError naming the signal and the
 child's last output. WorkerSession has binding.Session's interface; requests and answers are
-pickled over a socket pair. Run as a script, this file is the child: it serves one session.
+pickled over a socket pair. Run as a script, this file is the child: it serves one session. The
+child's interpreter runs isolated from the user's Python setup (-I, no PYTHON* variables) and writes
+no bytecode (-B), so nothing lands in the add-on's folder.
 """
 import os
 import pickle
@@ -16,7 +18,9 @@ import tempfile
 
 if __package__:
     from . import binding
-else:  # the child: run as a script next to binding.py
+else:  # the child, run as a script in isolated mode: its sys.path lacks the script's folder, so
+    # this file's folder (the add-on's core package, bpy-free) is put first explicitly.
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import binding
 
 ERR_WORKER_DIED = binding.ERR_INTERNAL
@@ -55,6 +59,22 @@ class WorkerStartError(binding.QGPError):
     """The child process could not be started (no usable Python or numpy): nothing native ran."""
 
 
+def child_environment():
+    """The child's environment: the user's, without any PYTHON* variable (PYTHONPATH, PYTHONHOME,
+    PYTHONSTARTUP, ... could make the interpreter import other modules or fail to start; the
+    interpreter's -I ignores them as well), and QGP_LIBRARY naming the library this process loaded."""
+    env = {name: value for name, value in os.environ.items() if not name.startswith("PYTHON")}
+    if binding.loaded_library_path():
+        env["QGP_LIBRARY"] = binding.loaded_library_path()
+    return env
+
+
+def child_command(fd):
+    """The child's command line: isolated mode (-I: no PYTHON* variables, no user site-packages, no
+    script folder on sys.path) and no bytecode written (-B: no __pycache__ in the add-on's folder)."""
+    return [python_executable(), "-I", "-B", os.path.abspath(__file__), str(fd)]
+
+
 def python_executable():
     """The interpreter Blender embeds (same version and packages), not whatever `python` is on PATH."""
     version = f"python{sys.version_info.major}.{sys.version_info.minor}"
@@ -73,14 +93,10 @@ class WorkerSession(binding.SessionLifetime):
         self._conn = None
         self._log = tempfile.TemporaryFile()
         parent, child = socket.socketpair()
-        env = dict(os.environ)
-        if binding.loaded_library_path():
-            env["QGP_LIBRARY"] = binding.loaded_library_path()
         try:
             self._process = subprocess.Popen(
-                [python_executable(), "-s", os.path.abspath(__file__), str(child.fileno())],
-                pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL, stdout=self._log,
-                stderr=subprocess.STDOUT, env=env, close_fds=True)
+                child_command(child.fileno()), pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL,
+                stdout=self._log, stderr=subprocess.STDOUT, env=child_environment(), close_fds=True)
         except OSError as e:
             parent.close()
             raise WorkerStartError(binding.ERR_INTERNAL, f"cannot start the worker process: {e}")

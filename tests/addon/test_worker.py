@@ -3,17 +3,29 @@
 a remesh in the worker gives exactly the in-process result; native errors keep their code and
 message; a worker killed mid-job (SIGKILL, SIGSEGV) is an error naming the signal and the session
 reports itself dead; closing during a job ends the child; a worker that cannot start is a
-WorkerStartError. Usage: test_worker.py --library libqgp.so --meshes DIR"""
+WorkerStartError; the child is isolated from the user's PYTHON* variables (a PYTHONPATH with
+poisoned modules, a bogus PYTHONHOME) and writes no bytecode into the add-on's folder.
+The add-on is used from a temporary copy of addon/ (removed at exit), which this process does not
+write bytecode into either. Usage: test_worker.py --library libqgp.so --meshes DIR"""
 import argparse
+import atexit
 import os
+import shutil
 import signal
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
+COPY = os.path.join(tempfile.mkdtemp(prefix="qgp_addon_copy_"), "addon")
+shutil.copytree(os.path.join(ROOT, "addon"), COPY, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+atexit.register(shutil.rmtree, os.path.dirname(COPY), ignore_errors=True)
+sys.dont_write_bytecode = True  # any __pycache__ in the copy is the worker's,
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # which must not rely on the caller's environment to avoid it
+sys.path.insert(0, COPY)
 from core import binding, worker  # noqa: E402
 
 failures = []
@@ -102,6 +114,64 @@ def start_failure():
         worker.python_executable = original
 
 
+def pycache_dirs(folder):
+    return sorted(os.path.relpath(os.path.join(d, n), folder)
+                  for d, names, _ in os.walk(folder) for n in names if n == "__pycache__")
+
+
+def poisoned_environment(folder):
+    """PYTHON* variables that break a non-isolated interpreter: a sitecustomize that ends the
+    process, a numpy and a binding module that raise, a PYTHONHOME without a standard library."""
+    with open(os.path.join(folder, "sitecustomize.py"), "w") as f:
+        f.write("import os\nos._exit(17)\n")
+    for name in ("numpy", "binding"):
+        with open(os.path.join(folder, name + ".py"), "w") as f:
+            f.write(f"raise ImportError('poisoned {name} from PYTHONPATH')\n")
+    return {"PYTHONPATH": folder, "PYTHONHOME": "/nonexistent/python-home", "PYTHONSTARTUP": os.path.join(folder, "x"),
+            "PYTHONUSERBASE": folder}
+
+
+def isolated_from_python_environment(meshes):
+    """With the user's environment poisoned, the worker still starts, sees no PYTHON* variable and
+    gives the in-process result; no __pycache__ appears in the add-on's folder."""
+    poison = tempfile.mkdtemp(prefix="qgp_poison_")
+    env = poisoned_environment(poison)
+    # The poison works: a plain interpreter given PYTHONPATH or PYTHONHOME alone fails.
+    for name in ("PYTHONPATH", "PYTHONHOME"):
+        plain = subprocess.run([worker.python_executable(), "-c", "import numpy"], capture_output=True,
+                               env=dict(os.environ, **{name: env[name]}))
+        check(plain.returncode != 0, f"the poisoned {name} breaks a plain interpreter (exit {plain.returncode})")
+    vertices, triangles = load(meshes, "bunny.off")
+    with binding.Session(vertices, triangles) as session:
+        session.set_option("target_faces", 800)
+        session.run(binding.JOB_REMESH)
+        expected = session.quad_mesh()[1]
+    saved = {name: os.environ.get(name) for name in env}
+    os.environ.update(env)
+    try:
+        with worker.WorkerSession(vertices, triangles) as session:
+            with open(f"/proc/{session.pid}/environ", "rb") as f:
+                names = [entry.split(b"=", 1)[0].decode() for entry in f.read().split(b"\0") if entry]
+            check(not [n for n in names if n.startswith("PYTHON")] and "QGP_LIBRARY" in names,
+                  "the worker's environment has no PYTHON* variable, and QGP_LIBRARY")
+            session.set_option("target_faces", 800)
+            session.run(binding.JOB_REMESH)
+            quads = session.quad_mesh()[1]
+            check(np.array_equal(quads, expected), f"poisoned PYTHONPATH / PYTHONHOME: the worker's {len(quads)} quads "
+                                                   "are the in-process result")
+    except binding.QGPError as e:
+        check(False, f"poisoned PYTHONPATH / PYTHONHOME: the worker runs a job ({e.message[:100]})")
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+        shutil.rmtree(poison, ignore_errors=True)
+    found = pycache_dirs(COPY)
+    check(not found, f"no __pycache__ under the add-on's folder after worker jobs: {found or 'none'}")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--library", required=True)
@@ -114,6 +184,7 @@ def main():
         killed_mid_job(args.meshes, sig)
     close_during_job_ends_child(args.meshes)
     start_failure()
+    isolated_from_python_environment(args.meshes)
     sys.exit(1 if failures else 0)
 
 

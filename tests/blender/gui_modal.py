@@ -30,8 +30,8 @@ def finish(**facts):
         json.dump(result, f, indent=2)
     operators = sys.modules.get(MODULE + ".operators")
     if operators is not None:
-        for _, session in operators._session_cache.values():
-            session.close()
+        for entry in operators._session_cache.values():  # (settings, session, fallback)
+            entry[1].close()
     sys.stdout.flush()
     os._exit(0)
 

@@ -180,6 +180,47 @@ def test_worker_fault_leaves_blender_running():
     print(f"worker crash: reported ({message[:60]}...), scene unchanged, next run fine")
 
 
+def test_worker_start_failure_warns():
+    """A worker that cannot start (the add-on's hook worker.python_executable pointed at a missing
+    interpreter): both operators still run the job, inside Blender, and report a WARNING naming why;
+    the cached in-process session warns again on its next job."""
+    import contextlib
+    import io
+    worker = sys.modules[MODULE + ".core.worker"]
+    operators = sys.modules[MODULE + ".operators"]
+    reset_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=40, ring_count=20)
+    obj = bpy.context.active_object
+    original = worker.python_executable
+    worker.python_executable = lambda: "/nonexistent/qgp-python3"
+    outputs = []
+    try:
+        for op, options in ((bpy.ops.object.qgp_quad_remesh, dict(target_faces=400, keep_source_visible=True)),
+                            (bpy.ops.object.qgp_grid_uv, dict(target_faces=400, flip_free_copy=False))):
+            select_only(obj)
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):  # bpy.ops writes an operator's reports to sys.stdout
+                result = op(**options)
+            print(out.getvalue(), end="")
+            assert result == {"FINISHED"}, result
+            outputs.append(out.getvalue())
+        session = operators._session_cache[obj.name][1]
+        assert not hasattr(session, "pid"), "the job ran in a worker process"
+    finally:
+        worker.python_executable = original
+        entry = operators._session_cache.pop(obj.name, None)
+        if entry:
+            entry[1].close()
+    quad = bpy.data.objects[obj.name + "_quads"]
+    assert {len(p.vertices) for p in quad.data.polygons} == {4}
+    assert len(quad.data.polygons) == quad["qgp"]["quads_expected"] > 0, quad["qgp"].to_dict()
+    assert "QGP Grid" in obj.data.uv_layers
+    for output in outputs:
+        warnings = [line for line in output.splitlines() if line.startswith("Warning:")]
+        assert any("inside Blender" in w and "/nonexistent/qgp-python3" in w for w in warnings), output
+    print(f"worker start failure: {len(quad.data.polygons)} quads and grid UVs in-process, warned: {warnings[0][:90]}")
+
+
 def euler_characteristic(mesh):
     return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
 
@@ -677,7 +718,8 @@ def main():
     print("installed", addon.__file__, "library", binding.version())
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
-             (test_select_faces, ()), (test_keep_source_visible, ()), (test_redo_reuses_session, ()),
+             (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
+             (test_redo_reuses_session, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ())]
