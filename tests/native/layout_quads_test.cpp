@@ -27,13 +27,14 @@ bool known_flips(const std::string& name) {
     if (name == n) return true;
   return false;
 }
-// ... and after it.
-// dragon-genus1 (noisy scan) keeps many; nefertiti's seamless map differs from run to run (Ipopt with
-// MUMPS, see README) and on some runs one quad at 2 000 stays flipped.
-int allowed_flips_after_untangle(const std::string& name) {
-  if (name == "dragon-genus1.obj") return std::numeric_limits<int>::max();
-  return name == "nefertiti.obj" ? 2 : 0;
-}
+// ... and after it: dragon-genus1 (noisy scan) keeps 8 at 500 quads and none at 2 000 (measured
+// 2026-11-26; the output is the same every run since MUMPS orders with AMF). Every other mesh: none.
+int allowed_flips_after_untangle(const std::string& name) { return name == "dragon-genus1.obj" ? 8 : 0; }
+
+// Hausdorff distance bound (relative to the diagonal): it grows with the quad size, about
+// 1/sqrt(target). 6 % at 500 quads, 3 % at 2 000; measured at most 5.1 % (joint_rem_p, 500) and
+// 2.0 % (mnf07, 2 000).
+double hausdorff_bound(double target) { return 0.06 * std::sqrt(500 / target); }
 
 // Mean length of the edges at each vertex.
 std::vector<double> mean_edge_length(const QuadMesh& quads) {
@@ -97,8 +98,8 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
           EXPECT_LT(std::sqrt(bvh.closest_point(untangled.V.row(v).transpose()).squared_distance), 1e-9 * diagonal)
               << where << " vertex " << v;
         }
-        EXPECT_LT(after.quad.hausdorff, 0.06) << where;
-        EXPECT_LT(m.quad.hausdorff, 0.06) << where;
+        EXPECT_LT(after.quad.hausdorff, hausdorff_bound(target)) << where;
+        EXPECT_LT(m.quad.hausdorff, hausdorff_bound(target)) << where;
         for (int v = 0; v < quads.num_vertices(); ++v) {
           EXPECT_GE(quads.vertex_face[v], 0) << where;
           EXPECT_LT(quads.vertex_face[v], state.mesh.num_faces()) << where;

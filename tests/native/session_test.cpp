@@ -509,6 +509,33 @@ TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
+// The known defect, bounded: dragon-genus1 (a noisy scan) at 2 000 quads. Its integer-grid map keeps
+// flipped and degenerate triangles and wound one-rings, so the quads come from the T-mesh layout,
+// and 18 of them face against the surface (measured 2026-11-26; the same every run). Everything
+// else a valid output promises holds; more flipped quads, or quads from the map, fail the test.
+TEST(SessionMeshes, NoisyScanKeepsItsKnownFlippedQuadsBounded) {
+  Session session(read_mesh_file(test::mesh_path("dragon-genus1.obj")));
+  run_completed(session, Job::Remesh, 2000);
+  const QuadMesh* quads = session.quad_result();
+  ASSERT_NE(quads, nullptr);
+  const Json& report = session.report();
+  EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>());
+  EXPECT_EQ(report["extraction"]["layout_components"].get<int>(), 1);
+  Progress progress;
+  const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, -1, progress);
+  std::cout << "dragon-genus1 @2000: " << m.quads << " quads, " << m.quad.flipped_quads() << " flipped, Hausdorff "
+            << m.quad.hausdorff << std::endl;
+  EXPECT_EQ(m.non_quads, 0);
+  EXPECT_EQ(m.non_manifold_edges, 0);
+  EXPECT_EQ(m.quad.topology.inconsistent_edges, 0);
+  EXPECT_EQ(m.quad.topology.degenerate_quads, 0);
+  EXPECT_EQ(m.euler_characteristic, m.reference_euler_characteristic);
+  EXPECT_EQ(test::irregular_vertices_off_singularities(*quads), 0);
+  EXPECT_LE(m.quad.flipped_quads(), 18);
+  EXPECT_EQ(report["quad"]["flipped_quads"].get<int>(), m.quad.flipped_quads());
+  EXPECT_LT(m.quad.hausdorff, 0.03);
+}
+
 // Runs whose quads used to fold against the surface (camelhead's thin ears, coarse limbs and heads)
 // before the untangle step maximized the quads' worst corner areas: the output invariants hold,
 // no quad flipped included.
