@@ -3,10 +3,10 @@
 
 Exit codes: 0 success, 1 bad command line, a features file that says nothing usable or an output
 that cannot be written, 2 unusable input (also with --uv-out / --layout-out asked), 3 a stage
-failed. Outputs are read back: the -o quad mesh (only quads, edge-manifold, the input's Euler characteristic, as many faces as the report
-says), the --layout-out polylines (one per T-edge), features from --sharp-angle and --features
-(counted here independently from the input's dihedral angles), --edge-length, --quantizer and
---drop-bad-components.
+failed. Outputs are read back: the -o quad mesh (only quads, edge-manifold, the input's Euler
+characteristic, as many faces as the report says), the --layout-out polylines (one per T-edge),
+features from --sharp-angle and --features (counted here independently from the input's dihedral
+angles), --edge-length, --quantizer and --drop-bad-components.
 """
 import argparse
 import json
