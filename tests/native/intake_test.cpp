@@ -402,12 +402,13 @@ void add_polygon(PolygonSoup& s, std::map<std::array<double, 3>, int>& index, co
   s.add_face(ids.data(), static_cast<int>(ids.size()));
 }
 
-// Unit cube at `origin` as six outward-oriented quads.
-void add_cube(PolygonSoup& s, std::map<std::array<double, 3>, int>& index, const Vec3& origin) {
+// Box at `origin` with the given side lengths, as six outward-oriented quads.
+void add_cube(PolygonSoup& s, std::map<std::array<double, 3>, int>& index, const Vec3& origin,
+              const Vec3& size = Vec3(1, 1, 1)) {
   static const int sides[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& side : sides) {
     std::vector<Vec3> corners;
-    for (int c : side) corners.push_back(origin + Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1));
+    for (int c : side) corners.push_back(origin + Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1).cwiseProduct(size));
     add_polygon(s, index, corners);
   }
 }
@@ -442,6 +443,26 @@ TEST(IntakeCut, TwoCubesSharingAnEdgeBecomeTwoClosedSheets) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::InvalidMesh);
     EXPECT_NE(std::string(e.what()).find("non-manifold edge"), std::string::npos) << e.what();
+  }
+}
+
+TEST(IntakeCut, BoxesTouchingAlongAPlaneStaySeparateSolids) {
+  // The unit cube and the box [-1,1] x [1,2] x [0,1] touch along the plane y = 1 and share the edge
+  // x = y = 1: two of its four faces lie at the same angle around it (as 200 of cycloidal's 242
+  // non-manifold edges); the face ending one solid goes before the face starting the other.
+  PolygonSoup s;
+  std::map<std::array<double, 3>, int> index;
+  add_cube(s, index, Vec3(0, 0, 0));
+  add_cube(s, index, Vec3(-1, 1, 0), Vec3(2, 1, 1));
+  ASSERT_EQ(s.num_vertices(), 14);
+  const IntakeResult r = intake_with(s, IntakeOptions{});
+  EXPECT_EQ(repair_count(r, "cut_nonmanifold_edges"), 1);
+  EXPECT_EQ(repair_count(r, "inconsistent_orientation"), 0);
+  ASSERT_EQ(r.components.size(), 2u);
+  for (const ComponentInfo& c : r.components) {
+    EXPECT_EQ(c.num_faces, 12);
+    EXPECT_TRUE(c.closed());
+    EXPECT_EQ(c.genus, 0);
   }
 }
 

@@ -425,6 +425,20 @@ int split_vertex_fans(TriangleSoup& soup, const std::vector<std::array<int, 2>>&
   return static_cast<int>(std::count(vertex_split.begin(), vertex_split.end(), 1));
 }
 
+// Triangles at the same angle around an edge (faces of two solids touching along a plane): the one
+// running from a to b, which ends a solid wedge, goes before the one that starts the next wedge.
+void put_ending_faces_first_at_ties(const TriangleSoup& soup, const std::vector<std::pair<double, int>>& by_angle,
+                                    int a, std::vector<int>& ring) {
+  const double kSameAngle = 1e-9;  // radians
+  auto runs_forward = [&](int h) { return soup.triangles[h / 3][h % 3] == a; };
+  for (size_t i = 0; i < ring.size();) {
+    size_t j = i + 1;
+    while (j < ring.size() && by_angle[j].first - by_angle[j - 1].first <= kSameAngle) ++j;
+    std::stable_partition(ring.begin() + i, ring.begin() + j, runs_forward);
+    i = j;
+  }
+}
+
 // Halfedges [i, j) of ef.sorted (edge a-b, a < b) in the order of their triangles' angle around
 // the axis from a to b.
 std::vector<int> halfedges_by_angle(const TriangleSoup& soup, const EdgeFaces& ef, size_t i, size_t j, int a, int b) {
@@ -443,6 +457,7 @@ std::vector<int> halfedges_by_angle(const TriangleSoup& soup, const EdgeFaces& e
   std::sort(by_angle.begin(), by_angle.end());
   std::vector<int> ring;
   for (const auto& entry : by_angle) ring.push_back(entry.second);
+  put_ending_faces_first_at_ties(soup, by_angle, a, ring);
   return ring;
 }
 
