@@ -351,6 +351,28 @@ TEST(IntakeWeld, UnweldedSoupBecomesTheOriginalMeshAgain) {
   }
 }
 
+TEST(IntakeWeld, FacesCollapsedByTheWeldAreDropped) {
+  // The torus soup plus a sliver along the first triangle's side p0-p1 whose third corner is within
+  // the tolerance of p0: welding makes it (p0, p0, p1), which is dropped and counted.
+  const IntakeResult original = test::load_mesh("torus.obj");
+  PolygonSoup soup = unwelded_soup(original.mesh);
+  const double diag = (original.mesh.V.colwise().maxCoeff() - original.mesh.V.colwise().minCoeff()).norm();
+  const int n = soup.num_vertices();
+  soup.positions.push_back(soup.positions[0]);
+  soup.positions.push_back(soup.positions[0] + Vec3(1e-8 * diag, 0, 0));
+  soup.positions.push_back(soup.positions[1]);
+  const int sliver[3] = {n, n + 2, n + 1};
+  soup.add_face(sliver, 3);
+  const IntakeResult r = intake_with(soup, IntakeOptions{});
+  EXPECT_EQ(repair_count(r, "collapsed_faces"), 1);
+  ASSERT_NE(find_repair(r, "collapsed_faces"), nullptr);
+  EXPECT_EQ(find_repair(r, "collapsed_faces")->input_vertices.size(), 1u);
+  EXPECT_EQ(r.mesh.num_vertices(), original.mesh.num_vertices());
+  EXPECT_EQ(r.mesh.num_faces(), original.mesh.num_faces());
+  ASSERT_EQ(r.components.size(), 1u);
+  EXPECT_EQ(r.components[0].genus, 1);
+}
+
 TEST(IntakeWeld, FeatureEdgesOfWeldedCopiesAreFound) {
   const IntakeResult original = test::load_mesh("spot.obj");
   const PolygonSoup soup = unwelded_soup(original.mesh);
@@ -443,6 +465,30 @@ TEST(IntakeCut, TwoCubesSharingAnEdgeBecomeTwoClosedSheets) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::InvalidMesh);
     EXPECT_NE(std::string(e.what()).find("non-manifold edge"), std::string::npos) << e.what();
+  }
+}
+
+TEST(IntakeCut, InsideOutCubesSharingAnEdgeStillGiveAManifold) {
+  // One or both cubes inside out: around the shared edge the preferred pairing no longer bounds the
+  // two solids (both inside out: it bounds the outside, and the two sheets meet again around the
+  // edge's ends, where the extra triangles are detached). Intake still ends edge-manifold (it
+  // throws Internal otherwise) with every face kept.
+  for (int first_inverted : {6, 0}) {
+    PolygonSoup s;
+    std::map<std::array<double, 3>, int> index;
+    add_cube(s, index, Vec3(0, 0, 0));
+    add_cube(s, index, Vec3(1, 1, 0));
+    for (int f = first_inverted; f < 12; ++f)
+      std::reverse(&s.face_vertices[s.face_start[f]], &s.face_vertices[s.face_start[f + 1]]);
+    const IntakeResult r = intake_with(s, IntakeOptions{});
+    EXPECT_EQ(repair_count(r, "cut_nonmanifold_edges"), 1);
+    EXPECT_EQ(r.mesh.num_faces(), 24);
+    int faces = 0;
+    for (const ComponentInfo& c : r.components) {
+      faces += c.num_faces;
+      EXPECT_EQ(c.euler_characteristic, 2 - 2 * c.genus - c.boundary_loops);
+    }
+    EXPECT_EQ(faces, 24);
   }
 }
 

@@ -58,9 +58,11 @@ int remove_collapsed_triangles(TriangleSoup& soup, RepairLocations* where);
 std::vector<std::array<int, 2>> find_nonmanifold_edges(const TriangleSoup& soup);
 
 // Cuts every edge shared by more than two triangles into sheets: the triangles around the edge
-// are paired in angular order (preferring pairs oriented consistently around a solid wedge), and
-// each pair (or left-over triangle) gets its own copies of the edge's vertices, so that the cut
-// edges become boundaries. Returns #edges cut; *where gets an input vertex of each.
+// are paired in angular order (preferring pairs oriented consistently around a solid wedge; of
+// two triangles at the same angle, the one ending a wedge goes first), and each pair (or left-over
+// triangle) gets its own copies of the edge's vertices, so that the cut edges become boundaries.
+// Where sheets still share an edge afterwards (they meet again around its vertices), the extra
+// triangles get copies of their own. Returns #edges cut; *where gets an input vertex of each.
 int cut_nonmanifold_edges(TriangleSoup& soup, RepairLocations* where);
 
 // Face components connected through shared edges (any number of faces per edge).
