@@ -76,6 +76,7 @@ void report_abnormal_ends() {
 struct CommandLine {
   std::string command, input, output, report, features, uv_out, layout_out;
   std::string quantizer = "greedy";
+  bool no_weld = false;
   qgp::RemeshOptions options;
 };
 
@@ -88,7 +89,14 @@ void add_commands(CLI::App& app, CommandLine& cl) {
     command->add_option("IN", cl.input, "input mesh: .obj, .ply or .off")->required();
     command->add_option("--report", cl.report, "write the JSON report here (also when the run fails)");
     command->add_flag("--drop-bad-components", cl.options.drop_bad_components,
-                      "drop non-manifold or non-orientable parts instead of refusing the mesh");
+                      "drop the parts that cannot be repaired (non-orientable ones; non-manifold ones with "
+                      "--refuse-non-manifold) instead of refusing the mesh");
+    command->add_flag("--no-weld", cl.no_weld,
+                      "do not weld boundary vertices closer than 1e-6 of the bounding-box diagonal (by default "
+                      "they are merged: meshes split at UV seams or hard normals become one surface again)");
+    command->add_flag("--refuse-non-manifold", cl.options.refuse_non_manifold,
+                      "refuse a mesh with non-manifold edges (more than two faces on an edge) instead of "
+                      "cutting them apart into sheets whose cut edges become boundaries");
   }
   remesh->add_option("-o,--output", cl.output, "the quad mesh to write (.obj)")->required();
   CLI::Option* faces = remesh->add_option("--faces", cl.options.target_faces, "target quad count (default 2000)")
@@ -126,6 +134,7 @@ bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
   }
   cl->command = app.got_subcommand("info") ? "info" : "remesh";
   cl->options.quantizer = qgp::parse_quantizer(cl->quantizer);
+  if (cl->no_weld) cl->options.weld_tolerance = 0;
   return true;
 }
 

@@ -1,9 +1,11 @@
 #!/usr/bin/python3
 """`qgp info` over every file of the shared mesh set.
 
-Checks: exit code 0 (usable) or 2 (unusable, one-line reason on stderr), never a signal; the
-report JSON is written either way; components / genus / boundary loops match the meshes' README
-for the manifold meshes. Prints a table (status, repairs, components, genus, loops, ms).
+Checks: exit code 0 (every shared mesh is usable: non-manifold edges are cut into sheets; with
+--refuse-non-manifold, truck and cycloidal exit 2 with a one-line reason), never a signal; the
+report JSON is written either way; every repair names where it happened (input_vertices);
+components / genus / boundary loops match the meshes' README for the manifold meshes. Prints a
+table (status, repairs, components, genus, loops, ms).
 """
 import argparse
 import json
@@ -24,7 +26,21 @@ EXPECTED = {
     "stanford-bunny.obj": (1, [0], [5]), "face.obj": (1, [0], [1]), "camelhead.off": (1, [0], [1]),
     "decimated-max.obj": (1, [0], [0]), "beetle.off": (1, [0], [11]),
 }
-UNUSABLE = {"truck.obj", "cycloidal.ply"}  # non-manifold edges: refused
+# Non-manifold edges: cut into sheets by default, refused with --refuse-non-manifold.
+NON_MANIFOLD = {"truck.obj", "cycloidal.ply"}
+
+
+def check_refuse_option(qgp, path, name, failures):
+    proc = subprocess.run([qgp, "info", path, "--refuse-non-manifold"], capture_output=True, text=True)
+    if proc.returncode != 2 or "non-manifold edge" not in proc.stderr:
+        failures.append(f"{name}: --refuse-non-manifold should refuse it (exit {proc.returncode})")
+
+
+def check_repairs_located(name, repairs, failures):
+    for r in repairs:
+        where = r.get("input_vertices")
+        if not isinstance(where, list) or not 1 <= len(where) <= 10:
+            failures.append(f"{name}: repair {r['kind']} without 1..10 input_vertices: {where}")
 
 
 def main():
@@ -57,13 +73,15 @@ def main():
                 lines = proc.stderr.strip().splitlines()
                 if len(lines) != 1 or report["status"] != "error" or not report["error"]["message"]:
                     failures.append(f"{name}: unusable input needs a one-line reason and an error report")
-                if name not in UNUSABLE:
-                    failures.append(f"{name}: refused unexpectedly: {proc.stderr.strip()}")
+                failures.append(f"{name}: refused unexpectedly: {proc.stderr.strip()}")
                 rows.append((name, "refused", lines[0][:60] if lines else "", "", "", "", ms))
                 continue
-            if name in UNUSABLE:
-                failures.append(f"{name}: should be refused (non-manifold edges)")
             inp = report["input"]
+            check_repairs_located(name, inp["repairs"], failures)
+            if name in NON_MANIFOLD:
+                if not any(r["kind"] == "cut_nonmanifold_edges" for r in inp["repairs"]):
+                    failures.append(f"{name}: its non-manifold edges should be cut (cut_nonmanifold_edges)")
+                check_refuse_option(args.qgp, os.path.join(args.meshes, name), name, failures)
             if name in EXPECTED:
                 comps, genus, loops = EXPECTED[name]
                 got = (inp["components"], inp["genus"], inp["boundary_loops"])

@@ -6,7 +6,8 @@ that cannot be written, 2 unusable input (also with --uv-out / --layout-out aske
 failed. Outputs are read back: the -o quad mesh (only quads, edge-manifold, the input's Euler
 characteristic, as many faces as the report says), the --layout-out polylines (one per T-edge),
 features from --sharp-angle and --features (counted here independently from the input's dihedral
-angles), --edge-length, --quantizer and --drop-bad-components.
+angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, and the
+welding of a triangle soup (--no-weld).
 """
 import argparse
 import json
@@ -187,17 +188,46 @@ def test_drop_bad_components(qgp, meshes, tmp):
             f.write("v %r %r %r\n" % v)
         for face in faces + [[n, n + 1, n + 2], [n + 1, n, n + 3], [n, n + 1, n + 4]]:
             f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
-    proc = run(qgp, "remesh", path, "-o", os.path.join(tmp, "refused.obj"), "--faces", 500)
-    check(proc.returncode == 2, "a non-manifold part: refused (exit 2) without --drop-bad-components")
+    report = os.path.join(tmp, "cut.json")
+    proc = run(qgp, "info", path, "--report", report)
+    kinds = [rep["kind"] for rep in json.load(open(report))["input"]["repairs"]]
+    check(proc.returncode == 0 and "cut_nonmanifold_edges" in kinds, "a non-manifold part: cut into sheets by default")
+    proc = run(qgp, "remesh", path, "-o", os.path.join(tmp, "refused.obj"), "--faces", 500, "--refuse-non-manifold")
+    check(proc.returncode == 2 and "non-manifold edge" in proc.stderr,
+          "a non-manifold part: refused (exit 2) with --refuse-non-manifold")
     report = os.path.join(tmp, "dropped.json")
     out = os.path.join(tmp, "dropped.obj")
-    proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, "--drop-bad-components", "--report", report)
+    proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, "--refuse-non-manifold", "--drop-bad-components",
+               "--report", report)
     r = json.load(open(report))
     kinds = [rep["kind"] for rep in r["input"]["repairs"]]
     check(proc.returncode == 0 and "dropped_nonmanifold_components" in kinds,
-          "--drop-bad-components: the part is dropped and the report says so")
+          "--refuse-non-manifold --drop-bad-components: the part is dropped and the report says so")
     qv, qf, _ = read_obj(out)
     check(len(qv) - len(edge_faces(qf)) + len(qf) == 2 and max(v[0] for v in qv) < 5, "only spot is remeshed")
+
+
+def test_weld(qgp, meshes, tmp):
+    # spot written as a triangle soup: every face with its own three vertices.
+    vertices, faces, _ = read_obj(os.path.join(meshes, "spot.obj"))
+    path = os.path.join(tmp, "spot_soup.obj")
+    with open(path, "w") as f:
+        for face in faces:
+            for i in face:
+                f.write("v %r %r %r\n" % vertices[i])
+        for k in range(len(faces)):
+            f.write("f %d %d %d\n" % (3 * k + 1, 3 * k + 2, 3 * k + 3))
+    report = os.path.join(tmp, "soup.json")
+    proc = run(qgp, "info", path, "--report", report)
+    inp = json.load(open(report))["input"]
+    welded = [r for r in inp["repairs"] if r["kind"] == "welded_vertices"]
+    check(proc.returncode == 0 and inp["components"] == 1 and inp["vertices"] == len(vertices)
+          and welded and welded[0]["count"] == 3 * len(faces) - len(vertices)
+          and 1 <= len(welded[0]["input_vertices"]) <= 10,
+          "a triangle soup is welded back into one component (welded_vertices, located)")
+    proc = run(qgp, "info", path, "--no-weld", "--report", report)
+    inp = json.load(open(report))["input"]
+    check(proc.returncode == 0 and inp["components"] == len(faces), "--no-weld keeps the soup's triangles apart")
 
 
 def main():
@@ -207,7 +237,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
-                     test_features, test_drop_bad_components):
+                     test_features, test_drop_bad_components, test_weld):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)

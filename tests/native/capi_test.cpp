@@ -164,6 +164,47 @@ TEST(CApi, OptionsAreValidated) {
   qgp_session_free(s);
 }
 
+// Every triangle of the grid with its own three vertices (a triangle soup).
+Grid unwelded(const Grid& g) {
+  Grid soup;
+  for (int32_t v : g.triangles) {
+    soup.triangles.push_back(static_cast<int32_t>(soup.vertices.size() / 3));
+    soup.vertices.insert(soup.vertices.end(), g.vertices.begin() + 3 * v, g.vertices.begin() + 3 * v + 3);
+  }
+  return soup;
+}
+
+int64_t intake_vertices(qgp_session* s) {
+  int64_t nv = -1;
+  EXPECT_EQ(qgp_intake_counts(s, &nv, nullptr, nullptr), QGP_OK);
+  return nv;
+}
+
+TEST(CApi, WeldToleranceOption) {
+  qgp_session* s = create(unwelded(make_grid(2)));  // 8 triangles, 24 vertices; welded: 9
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_EQ(intake_vertices(s), 9);
+  EXPECT_NE(report_of(s).find("welded_vertices"), std::string::npos);
+  EXPECT_EQ(qgp_session_set_option(s, "weld_tolerance", 0), QGP_OK);
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_EQ(intake_vertices(s), 24);
+  EXPECT_EQ(qgp_session_set_option(s, "weld_tolerance", -1), QGP_ERR_INVALID_ARGUMENT);
+  qgp_session_free(s);
+}
+
+TEST(CApi, RefuseNonManifoldOption) {
+  Grid book;  // three triangles on the edge 0-1
+  book.vertices = {0, 0, 0, 0, 0, 1, 1, 0, 0, -0.5, 0.8, 0, -0.5, -0.8, 0};
+  book.triangles = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  qgp_session* s = create(book);
+  EXPECT_EQ(run_intake(s), QGP_OK);
+  EXPECT_NE(report_of(s).find("cut_nonmanifold_edges"), std::string::npos);
+  EXPECT_EQ(qgp_session_set_option(s, "refuse_non_manifold", 1), QGP_OK);
+  EXPECT_EQ(run_intake(s), QGP_ERR_INVALID_MESH);
+  EXPECT_NE(std::string(qgp_session_error(s)).find("non-manifold edge"), std::string::npos);
+  qgp_session_free(s);
+}
+
 // A large mesh keeps the worker busy long enough to cancel, poll and free it mid-job.
 const Grid& big_grid() {
   static const Grid g = make_grid(900);  // 1.6 M triangles

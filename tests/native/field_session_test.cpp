@@ -47,7 +47,7 @@ ErrorCode run_remesh(Session& session, Progress& progress) {
 }
 
 TEST(FieldSession, ReportsTheFieldOfEveryComponent) {
-  Session session(read_mesh_file(test::mesh_path("teapot.obj")));  // 19 components, open
+  Session session(read_mesh_file(test::mesh_path("teapot.obj")));  // 4 components once welded, open
   Recorder recorder;
   Progress progress = recorder.progress();
   EXPECT_EQ(run_remesh(session, progress), kCompleted);

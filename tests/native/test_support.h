@@ -18,7 +18,7 @@ std::string mesh_path(const std::string& name);
 
 // Every mesh file of the shared set (27 files).
 std::vector<std::string> all_mesh_files();
-// The meshes intake accepts (all but the ones with non-manifold edges).
+// The meshes intake accepts with its default options (all: non-manifold edges are cut).
 std::vector<std::string> accepted_mesh_files();
 // The manifold meshes of the shared set's README (one clean component each).
 std::vector<std::string> manifold_mesh_files();

@@ -73,7 +73,10 @@ QGP_API const char* qgp_session_error(qgp_session* session);
 QGP_API int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t num_edges);
 
 /* Numeric options: "target_faces", "edge_length", "sharp_angle" (degrees, < 0 = off),
- * "drop_bad_components" (0/1), "fallback_uv_map" (0/1: build the flip-free cell map where the
+ * "drop_bad_components" (0/1: drop the parts intake cannot repair instead of refusing the mesh),
+ * "weld_tolerance" (>= 0, relative to the bounding-box diagonal, default 1e-6: boundary vertices
+ * this close are merged; 0 = no welding), "refuse_non_manifold" (0/1: refuse non-manifold edges
+ * instead of cutting them into sheets), "fallback_uv_map" (0/1: build the flip-free cell map where the
  * global map stays flipped, see qgp_result_uv_mesh_counts). A value <= 0 unsets target_faces /
  * edge_length. */
 QGP_API int qgp_session_set_option(qgp_session* session, const char* name, double value);

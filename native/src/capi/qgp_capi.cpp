@@ -214,12 +214,17 @@ int qgp_session_set_option(qgp_session* session, const char* name, double value)
       options.sharp_angle_deg = value;
     } else if (key == "drop_bad_components") {
       options.drop_bad_components = value != 0;
+    } else if (key == "weld_tolerance") {
+      options.weld_tolerance = value;
+    } else if (key == "refuse_non_manifold") {
+      options.refuse_non_manifold = value != 0;
     } else if (key == "fallback_uv_map") {
       options.fallback_uv_map = value != 0;
     } else {
       throw qgp::Error(qgp::ErrorCode::InvalidArgument, "unknown option '" + key +
                                                             "' (target_faces, edge_length, sharp_angle, "
-                                                            "drop_bad_components, fallback_uv_map)");
+                                                            "drop_bad_components, weld_tolerance, refuse_non_manifold, "
+                                                            "fallback_uv_map)");
     }
     session->session->set_options(options);
     return QGP_OK;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <numeric>
 #include <sstream>
 #include <unordered_map>
 
@@ -27,13 +28,115 @@ void drop_or_refuse(TriangleSoup& soup, const std::vector<int>& bad_components, 
   if (!allow_drop)
     throw Error(ErrorCode::InvalidMesh,
                 what + "; the mesh is refused (repair it, or allow dropping the affected parts)");
-  std::vector<char> keep(soup.triangles.size());
-  for (size_t t = 0; t < keep.size(); ++t) keep[t] = !bad[component[t]];
+  RepairLocations where;
+  std::vector<char> keep(soup.triangles.size()), located(num_components, 0);
+  for (size_t t = 0; t < keep.size(); ++t) {
+    keep[t] = !bad[component[t]];
+    if (bad[component[t]] && !located[component[t]]) {
+      located[component[t]] = 1;
+      where.add(soup.input_vertex[soup.triangles[t][0]]);
+    }
+  }
   keep_triangles(soup, keep);
-  result.repairs.push_back({repair_kind, static_cast<int>(bad_components.size())});
+  result.repairs.push_back({repair_kind, static_cast<int>(bad_components.size()), where.input_vertices});
   result.warnings.push_back(what + "; " + std::to_string(bad_components.size()) +
                             " affected component(s) were dropped");
   if (soup.triangles.empty()) throw Error(ErrorCode::InvalidMesh, what + "; no usable component is left");
+}
+
+// Records a repair that happened (count > 0) with where it happened.
+void note_repair(IntakeResult& result, const char* kind, int count, const RepairLocations& where) {
+  if (count > 0) result.repairs.push_back({kind, count, where.input_vertices});
+}
+
+// Runs one repair step that reports its locations and notes it.
+template <class Step>
+void run_repair(IntakeResult& result, const char* kind, Step step) {
+  RepairLocations where;
+  const int count = step(&where);
+  note_repair(result, kind, count, where);
+}
+
+// The refusal (or, with drop_bad_components, the dropping) of components with non-manifold edges.
+void refuse_nonmanifold_edges(TriangleSoup& soup, const std::vector<std::array<int, 2>>& nonmanifold,
+                              const IntakeOptions& options, IntakeResult& result) {
+  int num_components = 0;
+  const std::vector<int> component = edge_connected_components(soup, &num_components);
+  std::unordered_map<uint64_t, char> is_bad_edge;
+  for (auto e : nonmanifold) is_bad_edge[static_cast<uint64_t>(e[0]) << 32 | static_cast<uint32_t>(e[1])] = 1;
+  std::vector<char> bad(num_components, 0);
+  for (size_t t = 0; t < soup.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      int a = soup.triangles[t][k], b = soup.triangles[t][(k + 1) % 3];
+      if (a > b) std::swap(a, b);
+      if (is_bad_edge.count(static_cast<uint64_t>(a) << 32 | static_cast<uint32_t>(b))) bad[component[t]] = 1;
+    }
+  std::vector<int> bad_list;
+  for (int c = 0; c < num_components; ++c)
+    if (bad[c]) bad_list.push_back(c);
+  const auto& first = nonmanifold.front();
+  drop_or_refuse(soup, bad_list,
+                 std::to_string(nonmanifold.size()) +
+                     " non-manifold edge(s) (shared by more than two faces), the first between input vertices " +
+                     std::to_string(soup.input_vertex[first[0]]) + " and " +
+                     std::to_string(soup.input_vertex[first[1]]) + " at " + point_text(soup.positions[first[0]]),
+                 options.drop_bad_components, result, "dropped_nonmanifold_components");
+}
+
+// Cuts non-manifold edges into sheets, or refuses them when the options say so.
+void repair_nonmanifold_edges(TriangleSoup& soup, const IntakeOptions& options, IntakeResult& result) {
+  if (options.refuse_non_manifold) {
+    const auto nonmanifold = find_nonmanifold_edges(soup);
+    if (!nonmanifold.empty()) refuse_nonmanifold_edges(soup, nonmanifold, options, result);
+    return;
+  }
+  run_repair(result, "cut_nonmanifold_edges", [&](RepairLocations* w) { return cut_nonmanifold_edges(soup, w); });
+}
+
+// Welding of boundary vertices and the triangles it collapses.
+void weld(TriangleSoup& soup, const IntakeOptions& options, IntakeResult& result) {
+  result.weld_target.resize(result.input_vertices);
+  std::iota(result.weld_target.begin(), result.weld_target.end(), 0);
+  run_repair(result, "welded_vertices", [&](RepairLocations* w) {
+    return weld_boundary_vertices(soup, options.weld_tolerance, &result.weld_target, w);
+  });
+  run_repair(result, "collapsed_faces", [&](RepairLocations* w) { return remove_collapsed_triangles(soup, w); });
+}
+
+// Orientation, non-orientable parts, non-manifold vertices and zero-area faces.
+void repair_orientation_and_shape(TriangleSoup& soup, const IntakeOptions& options, IntakeResult& result) {
+  std::vector<int> non_orientable;
+  run_repair(result, "inconsistent_orientation",
+             [&](RepairLocations* w) { return orient_consistently(soup, &non_orientable, w); });
+  if (!non_orientable.empty()) {
+    drop_or_refuse(soup, non_orientable, std::to_string(non_orientable.size()) + " non-orientable component(s)",
+                   options.drop_bad_components, result, "dropped_nonorientable_components");
+  }
+  run_repair(result, "nonmanifold_vertices", [&](RepairLocations* w) { return split_nonmanifold_vertices(soup, w); });
+  int unrepaired = 0;
+  run_repair(result, "zero_area_faces", [&](RepairLocations* w) {
+    return repair_zero_area_faces(soup, options.zero_area, options.flatness, &unrepaired, w);
+  });
+  if (unrepaired > 0)
+    result.warnings.push_back(std::to_string(unrepaired) + " zero-area face(s) could not be repaired");
+  remove_unreferenced_vertices(soup);  // vertices orphaned by collapses
+}
+
+// The repaired soup as the result's mesh, with connectivity.
+void build_result_mesh(TriangleSoup& soup, IntakeResult& result) {
+  TriMesh& mesh = result.mesh;
+  mesh.V.resize(static_cast<int>(soup.positions.size()), 3);
+  for (size_t v = 0; v < soup.positions.size(); ++v) mesh.V.row(v) = soup.positions[v].transpose();
+  mesh.F.resize(static_cast<int>(soup.triangles.size()), 3);
+  for (size_t t = 0; t < soup.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) mesh.F(t, k) = soup.triangles[t][k];
+  result.input_vertex = std::move(soup.input_vertex);
+  result.input_face = std::move(soup.input_face);
+  try {
+    build_connectivity(mesh);
+  } catch (const Error& e) {  // the repair steps above guarantee a manifold; this is a bug
+    throw Error(ErrorCode::Internal, std::string("intake left a non-manifold mesh: ") + e.what());
+  }
 }
 
 void classify_components(IntakeResult& result) {
@@ -88,69 +191,17 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
   validate_soup(input);
 
   TriangleSoup soup;
-  auto note = [&](const char* kind, int count) {
-    if (count > 0) result.repairs.push_back({kind, count});
-  };
-  note("triangulated_polygons", triangulate_polygons(input, soup));
-  note("unreferenced_vertices", remove_unreferenced_vertices(soup));
-  note("duplicate_faces", remove_duplicate_faces(soup));
+  run_repair(result, "triangulated_polygons", [&](RepairLocations* w) { return triangulate_polygons(input, soup, w); });
+  run_repair(result, "unreferenced_vertices",
+             [&](RepairLocations* w) { return remove_unreferenced_vertices(soup, w); });
+  weld(soup, options, result);
+  run_repair(result, "duplicate_faces", [&](RepairLocations* w) { return remove_duplicate_faces(soup, w); });
   progress.update(0.2);
-
-  const auto nonmanifold = find_nonmanifold_edges(soup);
-  if (!nonmanifold.empty()) {
-    int num_components = 0;
-    const std::vector<int> component = edge_connected_components(soup, &num_components);
-    std::unordered_map<uint64_t, char> is_bad_edge;
-    for (auto e : nonmanifold) is_bad_edge[static_cast<uint64_t>(e[0]) << 32 | static_cast<uint32_t>(e[1])] = 1;
-    std::vector<char> bad(num_components, 0);
-    for (size_t t = 0; t < soup.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        int a = soup.triangles[t][k], b = soup.triangles[t][(k + 1) % 3];
-        if (a > b) std::swap(a, b);
-        if (is_bad_edge.count(static_cast<uint64_t>(a) << 32 | static_cast<uint32_t>(b))) bad[component[t]] = 1;
-      }
-    std::vector<int> bad_list;
-    for (int c = 0; c < num_components; ++c)
-      if (bad[c]) bad_list.push_back(c);
-    const auto& first = nonmanifold.front();
-    drop_or_refuse(soup, bad_list,
-                   std::to_string(nonmanifold.size()) +
-                       " non-manifold edge(s) (shared by more than two faces), the first between input vertices " +
-                       std::to_string(soup.input_vertex[first[0]]) + " and " +
-                       std::to_string(soup.input_vertex[first[1]]) + " at " + point_text(soup.positions[first[0]]),
-                   options.drop_bad_components, result, "dropped_nonmanifold_components");
-  }
+  repair_nonmanifold_edges(soup, options, result);
   progress.update(0.35);
-
-  std::vector<int> non_orientable;
-  note("inconsistent_orientation", orient_consistently(soup, &non_orientable));
-  if (!non_orientable.empty()) {
-    drop_or_refuse(soup, non_orientable, std::to_string(non_orientable.size()) + " non-orientable component(s)",
-                   options.drop_bad_components, result, "dropped_nonorientable_components");
-  }
-  note("nonmanifold_vertices", split_nonmanifold_vertices(soup));
-  progress.update(0.5);
-
-  int unrepaired = 0;
-  note("zero_area_faces", repair_zero_area_faces(soup, options.zero_area, options.flatness, &unrepaired));
-  if (unrepaired > 0)
-    result.warnings.push_back(std::to_string(unrepaired) + " zero-area face(s) could not be repaired");
-  remove_unreferenced_vertices(soup);  // vertices orphaned by collapses
+  repair_orientation_and_shape(soup, options, result);
   progress.update(0.7);
-
-  TriMesh& mesh = result.mesh;
-  mesh.V.resize(static_cast<int>(soup.positions.size()), 3);
-  for (size_t v = 0; v < soup.positions.size(); ++v) mesh.V.row(v) = soup.positions[v].transpose();
-  mesh.F.resize(static_cast<int>(soup.triangles.size()), 3);
-  for (size_t t = 0; t < soup.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) mesh.F(t, k) = soup.triangles[t][k];
-  result.input_vertex = std::move(soup.input_vertex);
-  result.input_face = std::move(soup.input_face);
-  try {
-    build_connectivity(mesh);
-  } catch (const Error& e) {  // the repair steps above guarantee a manifold; this is a bug
-    throw Error(ErrorCode::Internal, std::string("intake left a non-manifold mesh: ") + e.what());
-  }
+  build_result_mesh(soup, result);
   classify_components(result);
   progress.update(1.0);
   return result;
@@ -174,7 +225,8 @@ void to_json(Json& input, const IntakeResult& r) {
   input["euler_characteristic"] = chi;
   input["component_faces"] = faces;
   Json repairs = Json::array();
-  for (const Repair& rep : r.repairs) repairs.push_back({{"kind", rep.kind}, {"count", rep.count}});
+  for (const Repair& rep : r.repairs)
+    repairs.push_back({{"kind", rep.kind}, {"count", rep.count}, {"input_vertices", rep.input_vertices}});
   input["repairs"] = repairs;
   input["warnings"] = r.warnings;
 }
@@ -194,7 +246,10 @@ std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<
   std::vector<char> marked(mesh.num_edges(), 0);
   int missing = 0;
   for (const auto& p : input_pairs) {
-    auto range = by_input.equal_range(key(p[0], p[1]));
+    const auto welded = [&](int v) {
+      return v >= 0 && v < static_cast<int>(intake.weld_target.size()) ? intake.weld_target[v] : v;
+    };
+    auto range = by_input.equal_range(key(welded(p[0]), welded(p[1])));
     if (range.first == range.second) ++missing;
     for (auto it = range.first; it != range.second; ++it) marked[it->second] = 1;
   }

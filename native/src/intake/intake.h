@@ -13,8 +13,15 @@
 namespace qgp {
 
 struct IntakeOptions {
-  // Non-manifold edges or non-orientable parts: false refuses the mesh (Error InvalidMesh),
-  // true drops the affected connected components, keeps the rest and says so in the report.
+  // Boundary vertices closer than weld_tolerance * (bounding-box diagonal) are merged (exporters
+  // split meshes at UV seams and hard normals); 0 turns welding off.
+  double weld_tolerance = 1e-6;
+  // Non-manifold edges (more than two faces) are cut into sheets; true refuses the mesh instead
+  // (Error InvalidMesh naming the first such edge).
+  bool refuse_non_manifold = false;
+  // Parts that cannot be repaired (non-orientable, or non-manifold when refuse_non_manifold):
+  // false refuses the mesh (Error InvalidMesh), true drops the affected connected components,
+  // keeps the rest and says so in the report.
   bool drop_bad_components = false;
   // A face is zero-area when area <= zero_area * diag^2 (diag: bounding-box diagonal)
   // or 2*area <= flatness * (longest edge)^2: needles and caps this thin have a normal that is
@@ -24,8 +31,9 @@ struct IntakeOptions {
 };
 
 struct Repair {
-  std::string kind;  // unreferenced_vertices, duplicate_faces, zero_area_faces, ...
+  std::string kind;  // welded_vertices, cut_nonmanifold_edges, duplicate_faces, zero_area_faces, ...
   int count = 0;
+  std::vector<int> input_vertices;  // where: the first few (<= 10) input vertices it happened at
 };
 
 struct ComponentInfo {
@@ -41,6 +49,7 @@ struct IntakeResult {
   TriMesh mesh;                   // repaired, oriented, manifold; connectivity built
   std::vector<int> input_vertex;  // per mesh vertex: its index in the input soup
   std::vector<int> input_face;    // per mesh face: the input face (polygon) it came from
+  std::vector<int> weld_target;   // per input vertex: the input vertex it was welded into (or itself)
   std::vector<ComponentInfo> components;
   std::vector<Repair> repairs;  // only repairs that happened (count > 0)
   std::vector<std::string> warnings;
@@ -53,7 +62,8 @@ IntakeResult run_intake(const PolygonSoup& soup, const IntakeOptions& options, P
 // The "input" object of the JSON report.
 void to_json(Json& j, const IntakeResult& result);
 
-// Marks the mesh edges whose endpoints are the given input vertex pairs. Pairs that match no
+// Marks the mesh edges whose endpoints are the given input vertex pairs (welded vertices stand for
+// the vertex they were welded into). Pairs that match no
 // edge (not adjacent in the input, or removed by a repair) are counted in *unmatched.
 std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<std::array<int, 2>>& input_pairs,
                                   int* unmatched);

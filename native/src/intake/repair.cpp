@@ -152,9 +152,13 @@ class ZeroAreaRepair {
   }
 
   // Number of degenerate triangles in the soup.
-  int count_degenerate() const {
+  int count_degenerate(RepairLocations* where = nullptr) const {
     int n = 0;
-    for (int t = 0; t < static_cast<int>(soup_.triangles.size()); ++t) n += is_degenerate(t);
+    for (int t = 0; t < static_cast<int>(soup_.triangles.size()); ++t)
+      if (is_degenerate(t)) {
+        ++n;
+        if (where) where->add(soup_.input_vertex[soup_.triangles[t][0]]);
+      }
     return n;
   }
 
@@ -295,6 +299,211 @@ class ZeroAreaRepair {
   std::vector<int> replace_;
 };
 
+// Vertices of edges with exactly one triangle.
+std::vector<char> boundary_vertices(const TriangleSoup& soup) {
+  std::vector<char> on(soup.positions.size(), 0);
+  EdgeFaces ef(soup);
+  ef.for_each_edge([&](size_t i, size_t j) {
+    if (j - i != 1) return;
+    const uint64_t key = ef.sorted[i].first;
+    on[key >> 32] = on[key & 0xffffffffu] = 1;
+  });
+  return on;
+}
+
+double bounding_box_diagonal(const std::vector<Vec3>& positions) {
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& p : positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return positions.empty() ? 0 : (hi - lo).norm();
+}
+
+// Unites the candidate points closer than eps (exact duplicates also when eps is 0), looking up
+// neighbours in a hash grid of cells of size eps.
+void unite_close_points(const std::vector<Vec3>& positions, const std::vector<int>& candidates, double eps,
+                        DisjointSets& sets) {
+  using Cell = std::array<int64_t, 3>;
+  struct CellHash {
+    size_t operator()(const Cell& c) const {
+      return static_cast<size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+    }
+  };
+  const double cell_size = eps > 0 ? eps : 1;
+  auto cell_of = [&](const Vec3& p) {
+    Cell c;
+    for (int d = 0; d < 3; ++d) c[d] = static_cast<int64_t>(std::clamp(std::floor(p[d] / cell_size), -1e15, 1e15));
+    return c;
+  };
+  std::unordered_map<Cell, std::vector<int>, CellHash> grid;
+  for (int v : candidates) grid[cell_of(positions[v])].push_back(v);
+  for (int v : candidates) {
+    const Cell c = cell_of(positions[v]);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (int w : it->second)
+            if (w < v && (positions[w] - positions[v]).squaredNorm() <= eps * eps) sets.unite(w, v);
+        }
+  }
+}
+
+// Joins, in `corners`, the corners of the two triangles of halfedges h0 and h1 (the same edge)
+// at both ends of the edge.
+void unite_corners_across(const TriangleSoup& soup, int h0, int h1, DisjointSets& corners) {
+  for (int end = 0; end < 2; ++end) {
+    const int v = soup.triangles[h0 / 3][(h0 % 3 + end) % 3];
+    int c0 = -1, c1 = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (soup.triangles[h0 / 3][k] == v) c0 = 3 * (h0 / 3) + k;
+      if (soup.triangles[h1 / 3][k] == v) c1 = 3 * (h1 / 3) + k;
+    }
+    if (c0 >= 0 && c1 >= 0) corners.unite(c0, c1);
+  }
+}
+
+// Welding groups (lowest[root] = the group's vertex) that join no two boundary edges are cancelled
+// (lowest[root] = -1): they would only pinch the surface at a point.
+void keep_only_zipping_groups(const TriangleSoup& soup, const std::vector<int>& candidates, DisjointSets& sets,
+                              std::vector<int>& lowest) {
+  std::vector<std::pair<uint64_t, int>> welded_edges;  // (welded edge key, a root of it)
+  EdgeFaces ef(soup);
+  ef.for_each_edge([&](size_t i, size_t j) {
+    if (j - i != 1) return;
+    const uint64_t key = ef.sorted[i].first;
+    const int ra = sets.find(static_cast<int>(key >> 32)), rb = sets.find(static_cast<int>(key & 0xffffffffu));
+    if (ra != rb) welded_edges.push_back({edge_key(lowest[ra], lowest[rb]), ra});
+  });
+  std::sort(welded_edges.begin(), welded_edges.end());
+  std::vector<char> zips(soup.positions.size(), 0);
+  for (size_t k = 1; k < welded_edges.size(); ++k)
+    if (welded_edges[k].first == welded_edges[k - 1].first) {
+      const uint64_t key = welded_edges[k].first;
+      zips[sets.find(static_cast<int>(key >> 32))] = zips[sets.find(static_cast<int>(key & 0xffffffffu))] = 1;
+    }
+  for (int v : candidates)
+    if (!zips[sets.find(v)]) lowest[sets.find(v)] = -1;
+}
+
+// Gives every fan of triangles around a vertex its own vertex: corners are in one fan when their
+// triangles share a manifold edge (two triangles) or a pair of halfedges in `paired`. Only the
+// vertices flagged in *only (all when null) are split. Returns #vertices split.
+int split_vertex_fans(TriangleSoup& soup, const std::vector<std::array<int, 2>>& paired, const std::vector<char>* only,
+                      RepairLocations* where) {
+  const int nt = static_cast<int>(soup.triangles.size());
+  DisjointSets corners(3 * nt);
+  EdgeFaces ef(soup);
+  ef.for_each_edge([&](size_t i, size_t j) {
+    if (j - i == 2) unite_corners_across(soup, ef.sorted[i].second, ef.sorted[i + 1].second, corners);
+  });
+  for (const auto& pair : paired) unite_corners_across(soup, pair[0], pair[1], corners);
+  std::vector<int> fan_vertex(3 * nt, -1);  // per corner root: assigned vertex
+  const size_t original_vertices = soup.positions.size();
+  std::vector<char> vertex_used(original_vertices, 0), vertex_split(original_vertices, 0);
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int v = soup.triangles[t][k];
+      if (only && !(*only)[v]) continue;
+      int& assigned = fan_vertex[corners.find(3 * t + k)];
+      if (assigned < 0) {
+        if (!vertex_used[v]) {
+          vertex_used[v] = 1;
+          assigned = v;
+        } else {  // a further fan around v: give it a copy of v
+          if (!vertex_split[v] && where) where->add(soup.input_vertex[v]);
+          vertex_split[v] = 1;
+          assigned = static_cast<int>(soup.positions.size());
+          soup.positions.push_back(soup.positions[v]);
+          soup.input_vertex.push_back(soup.input_vertex[v]);
+        }
+      }
+      soup.triangles[t][k] = assigned;
+    }
+  return static_cast<int>(std::count(vertex_split.begin(), vertex_split.end(), 1));
+}
+
+// Triangles at the same angle around an edge (faces of two solids touching along a plane): the one
+// running from a to b, which ends a solid wedge, goes before the one that starts the next wedge.
+void put_ending_faces_first_at_ties(const TriangleSoup& soup, const std::vector<std::pair<double, int>>& by_angle,
+                                    int a, std::vector<int>& ring) {
+  const double kSameAngle = 1e-9;  // radians
+  auto runs_forward = [&](int h) { return soup.triangles[h / 3][h % 3] == a; };
+  for (size_t i = 0; i < ring.size();) {
+    size_t j = i + 1;
+    while (j < ring.size() && by_angle[j].first - by_angle[j - 1].first <= kSameAngle) ++j;
+    std::stable_partition(ring.begin() + i, ring.begin() + j, runs_forward);
+    i = j;
+  }
+}
+
+// Halfedges [i, j) of ef.sorted (edge a-b, a < b) in the order of their triangles' angle around
+// the axis from a to b.
+std::vector<int> halfedges_by_angle(const TriangleSoup& soup, const EdgeFaces& ef, size_t i, size_t j, int a, int b) {
+  const Vec3 axis = (soup.positions[b] - soup.positions[a]).normalized();
+  auto radial = [&](int h) {
+    const int apex = soup.triangles[h / 3][(h % 3 + 2) % 3];
+    const Vec3 r = soup.positions[apex] - soup.positions[a];
+    return Vec3(r - axis * axis.dot(r));
+  };
+  const Vec3 e1 = radial(ef.sorted[i].second).normalized(), e2 = axis.cross(e1);
+  std::vector<std::pair<double, int>> by_angle;
+  for (size_t k = i; k < j; ++k) {
+    const Vec3 r = radial(ef.sorted[k].second);
+    by_angle.push_back({std::atan2(r.dot(e2), r.dot(e1)), ef.sorted[k].second});
+  }
+  std::sort(by_angle.begin(), by_angle.end());
+  std::vector<int> ring;
+  for (const auto& entry : by_angle) ring.push_back(entry.second);
+  put_ending_faces_first_at_ties(soup, by_angle, a, ring);
+  return ring;
+}
+
+// Pairs angular neighbours of `ring` (halfedges around an edge starting at vertex a) into sheets.
+// A pair bounding a solid wedge (the first runs b to a, the next a to b: both normals point out
+// of the wedge) scores 2, any other oppositely oriented pair 1; the best-scoring start wins. With
+// an odd count one triangle stays alone.
+std::vector<std::array<int, 2>> pair_into_sheets(const TriangleSoup& soup, const std::vector<int>& ring, int a) {
+  const int n = static_cast<int>(ring.size());
+  std::vector<char> forward(n);
+  for (int i = 0; i < n; ++i) forward[i] = soup.triangles[ring[i] / 3][ring[i] % 3] == a;
+  auto pair_score = [&](int i, int j) { return !forward[i] && forward[j] ? 2 : forward[i] != forward[j] ? 1 : 0; };
+  int best_start = 0, best_score = -1;
+  for (int s = 0; s < (n % 2 == 0 ? 2 : n); ++s) {
+    int score = 0;
+    for (int p = 0; p < n / 2; ++p) score += pair_score((s + 2 * p) % n, (s + 2 * p + 1) % n);
+    if (score > best_score) best_score = score, best_start = s;
+  }
+  std::vector<std::array<int, 2>> pairs;
+  for (int p = 0; p < n / 2; ++p) pairs.push_back({ring[(best_start + 2 * p) % n], ring[(best_start + 2 * p + 1) % n]});
+  return pairs;
+}
+
+// Fallback after the sheet split: triangles beyond the first two still on one edge (their sheets
+// meet again elsewhere around the edge's vertices) get their own copies of the edge's vertices.
+void detach_remaining_nonmanifold_faces(TriangleSoup& soup) {
+  EdgeFaces ef(soup);
+  std::vector<char> endpoint(soup.positions.size(), 0);
+  bool detached = false;
+  ef.for_each_edge([&](size_t i, size_t j) {
+    for (size_t k = i + 2; k < j; ++k) {
+      const int h = ef.sorted[k].second;
+      for (int end = 0; end < 2; ++end) {
+        int& v = soup.triangles[h / 3][(h % 3 + end) % 3];
+        endpoint[v] = 1;
+        soup.positions.push_back(soup.positions[v]);
+        soup.input_vertex.push_back(soup.input_vertex[v]);
+        v = static_cast<int>(soup.positions.size()) - 1;
+      }
+      detached = true;
+    }
+  });
+  endpoint.resize(soup.positions.size(), 0);
+  if (detached) split_vertex_fans(soup, {}, &endpoint, nullptr);
+}
+
 }  // namespace
 
 void validate_soup(const PolygonSoup& soup) {
@@ -323,7 +532,7 @@ void validate_soup(const PolygonSoup& soup) {
   }
 }
 
-int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out) {
+int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out, RepairLocations* where) {
   out.positions = soup.positions;
   out.input_vertex.resize(soup.positions.size());
   std::iota(out.input_vertex.begin(), out.input_vertex.end(), 0);
@@ -352,6 +561,7 @@ int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out) {
     } else {
       triangulate_polygon(soup, f, existing, out.triangles);
       ++polygons;
+      if (where) where->add(soup.face_vertices[soup.face_start[f]]);
     }
     out.input_face.resize(out.triangles.size(), f);
     (void)before;
@@ -372,7 +582,7 @@ void keep_triangles(TriangleSoup& soup, const std::vector<char>& keep) {
   remove_unreferenced_vertices(soup);
 }
 
-int remove_unreferenced_vertices(TriangleSoup& soup) {
+int remove_unreferenced_vertices(TriangleSoup& soup, RepairLocations* where) {
   std::vector<int> remap(soup.positions.size(), -1);
   for (const auto& t : soup.triangles)
     for (int v : t) remap[v] = 0;
@@ -380,6 +590,7 @@ int remove_unreferenced_vertices(TriangleSoup& soup) {
   for (size_t v = 0; v < remap.size(); ++v) {
     if (remap[v] < 0) {
       ++removed;
+      if (where) where->add(soup.input_vertex[v]);
       continue;
     }
     remap[v] = next;
@@ -394,7 +605,7 @@ int remove_unreferenced_vertices(TriangleSoup& soup) {
   return removed;
 }
 
-int remove_duplicate_faces(TriangleSoup& soup) {
+int remove_duplicate_faces(TriangleSoup& soup, RepairLocations* where) {
   std::vector<std::pair<std::array<int, 3>, int>> keyed(soup.triangles.size());
   for (size_t t = 0; t < soup.triangles.size(); ++t) {
     auto key = soup.triangles[t];
@@ -408,6 +619,7 @@ int remove_duplicate_faces(TriangleSoup& soup) {
     if (keyed[i].first == keyed[i - 1].first) {
       keep[keyed[i].second] = 0;
       ++removed;
+      if (where) where->add(soup.input_vertex[keyed[i].first[0]]);
     }
   if (removed) keep_triangles(soup, keep);
   return removed;
@@ -441,7 +653,7 @@ std::vector<int> edge_connected_components(const TriangleSoup& soup, int* num_co
   return id;
 }
 
-int orient_consistently(TriangleSoup& soup, std::vector<int>* non_orientable) {
+int orient_consistently(TriangleSoup& soup, std::vector<int>* non_orientable, RepairLocations* where) {
   const int nt = static_cast<int>(soup.triangles.size());
   // Adjacency over manifold edges: (neighbour, same_direction) per halfedge.
   std::vector<int> neighbour(3 * nt, -1);
@@ -490,6 +702,7 @@ int orient_consistently(TriangleSoup& soup, std::vector<int>* non_orientable) {
       if (flip[t] && !bad_component[component[t]]) {
         std::swap(soup.triangles[t][1], soup.triangles[t][2]);
         ++flipped_total;
+        if (where) where->add(soup.input_vertex[soup.triangles[t][0]]);
       }
     }
   }
@@ -501,51 +714,81 @@ int orient_consistently(TriangleSoup& soup, std::vector<int>* non_orientable) {
   return flipped_total;
 }
 
-int split_nonmanifold_vertices(TriangleSoup& soup) {
-  const int nt = static_cast<int>(soup.triangles.size());
-  // Corners (3*t + k) around the same vertex are joined when their faces share an edge at it.
-  DisjointSets corners(3 * nt);
-  EdgeFaces ef(soup);
-  ef.for_each_edge([&](size_t i, size_t j) {
-    if (j - i != 2) return;
-    const int h0 = ef.sorted[i].second, h1 = ef.sorted[i + 1].second;
-    for (int end = 0; end < 2; ++end) {
-      const int v = soup.triangles[h0 / 3][(h0 % 3 + end) % 3];
-      int c0 = -1, c1 = -1;
-      for (int k = 0; k < 3; ++k) {
-        if (soup.triangles[h0 / 3][k] == v) c0 = 3 * (h0 / 3) + k;
-        if (soup.triangles[h1 / 3][k] == v) c1 = 3 * (h1 / 3) + k;
-      }
-      corners.unite(c0, c1);
-    }
-  });
-  std::vector<int> fan_vertex(3 * nt, -1);  // per corner root: assigned vertex
-  std::vector<char> vertex_used(soup.positions.size(), 0);
-  std::vector<char> vertex_split(soup.positions.size(), 0);
-  for (int t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const int root = corners.find(3 * t + k);
-      int& assigned = fan_vertex[root];
-      const int v = soup.triangles[t][k];
-      if (assigned < 0) {
-        if (!vertex_used[v]) {
-          vertex_used[v] = 1;
-          assigned = v;
-        } else {  // a further fan around v: give it a copy of v
-          vertex_split[v] = 1;
-          assigned = static_cast<int>(soup.positions.size());
-          soup.positions.push_back(soup.positions[v]);
-          soup.input_vertex.push_back(soup.input_vertex[v]);
-        }
-      }
-      soup.triangles[t][k] = assigned;
-    }
-  return static_cast<int>(std::count(vertex_split.begin(), vertex_split.end(), 1));
+int split_nonmanifold_vertices(TriangleSoup& soup, RepairLocations* where) {
+  return split_vertex_fans(soup, {}, nullptr, where);
 }
 
-int repair_zero_area_faces(TriangleSoup& soup, double zero_area, double flatness, int* remaining) {
+int weld_boundary_vertices(TriangleSoup& soup, double tolerance, std::vector<int>* input_weld_target,
+                           RepairLocations* where) {
+  if (!(tolerance > 0) || soup.positions.empty()) return 0;
+  const std::vector<char> on_boundary = boundary_vertices(soup);
+  std::vector<int> candidates;
+  for (size_t v = 0; v < on_boundary.size(); ++v)
+    if (on_boundary[v]) candidates.push_back(static_cast<int>(v));
+  if (candidates.empty()) return 0;
+  DisjointSets sets(static_cast<int>(soup.positions.size()));
+  unite_close_points(soup.positions, candidates, tolerance * bounding_box_diagonal(soup.positions), sets);
+  std::vector<int> lowest(soup.positions.size(), -1);  // per set root: its lowest vertex
+  for (int v : candidates) {
+    int& low = lowest[sets.find(v)];
+    if (low < 0 || v < low) low = v;
+  }
+  keep_only_zipping_groups(soup, candidates, sets, lowest);
+  int merged = 0;
+  for (int v : candidates) {
+    const int target = lowest[sets.find(v)];
+    if (target < 0 || target == v) continue;
+    ++merged;
+    if (input_weld_target) (*input_weld_target)[soup.input_vertex[v]] = soup.input_vertex[target];
+    if (where) where->add(soup.input_vertex[target]);
+  }
+  if (merged == 0) return 0;
+  for (auto& t : soup.triangles)
+    for (int& v : t)
+      if (on_boundary[v] && lowest[sets.find(v)] >= 0) v = lowest[sets.find(v)];
+  remove_unreferenced_vertices(soup);
+  return merged;
+}
+
+int remove_collapsed_triangles(TriangleSoup& soup, RepairLocations* where) {
+  std::vector<char> keep(soup.triangles.size(), 1);
+  int removed = 0;
+  for (size_t t = 0; t < soup.triangles.size(); ++t) {
+    const auto& tri = soup.triangles[t];
+    if (tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]) continue;
+    keep[t] = 0;
+    ++removed;
+    if (where) where->add(soup.input_vertex[tri[0] == tri[2] ? tri[0] : tri[1]]);
+  }
+  if (removed) keep_triangles(soup, keep);
+  return removed;
+}
+
+int cut_nonmanifold_edges(TriangleSoup& soup, RepairLocations* where) {
+  std::vector<std::array<int, 2>> paired;
+  std::vector<char> endpoint(soup.positions.size(), 0);
+  int cut = 0;
+  EdgeFaces ef(soup);
+  ef.for_each_edge([&](size_t i, size_t j) {
+    if (j - i <= 2) return;
+    const uint64_t key = ef.sorted[i].first;
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    const std::vector<int> ring = halfedges_by_angle(soup, ef, i, j, a, b);
+    for (const auto& pair : pair_into_sheets(soup, ring, a)) paired.push_back(pair);
+    endpoint[a] = endpoint[b] = 1;
+    ++cut;
+    if (where) where->add(soup.input_vertex[a]);
+  });
+  if (cut == 0) return 0;
+  split_vertex_fans(soup, paired, &endpoint, nullptr);
+  detach_remaining_nonmanifold_faces(soup);
+  return cut;
+}
+
+int repair_zero_area_faces(TriangleSoup& soup, double zero_area, double flatness, int* remaining,
+                           RepairLocations* where) {
   ZeroAreaRepair repair(soup, zero_area, flatness);
-  const int found = repair.count_degenerate();
+  const int found = repair.count_degenerate(where);
   if (found == 0) {
     if (remaining) *remaining = 0;
     return 0;

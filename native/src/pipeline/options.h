@@ -17,7 +17,9 @@ struct RemeshOptions {
   double sharp_angle_deg = -1;                    // dihedral angle above which an edge is a feature; < 0: off
   std::vector<std::array<int, 2>> feature_edges;  // input vertex index pairs (marked sharp)
   Quantizer quantizer = Quantizer::Greedy;
-  bool drop_bad_components = false;  // drop non-manifold / non-orientable parts instead of refusing
+  bool drop_bad_components = false;  // drop parts intake cannot repair instead of refusing the mesh
+  double weld_tolerance = 1e-6;      // weld boundary vertices closer than this times the diagonal; 0: off
+  bool refuse_non_manifold = false;  // refuse non-manifold edges instead of cutting them into sheets
   // Where the integer-grid map stays flipped, also build the fallback cell map on the mesh with the
   // T-mesh inserted (igm/cell_map; for maps written as files, qgp --uv-out).
   bool fallback_uv_map = false;

@@ -24,12 +24,16 @@ void Session::set_options(const RemeshOptions& options) {
   if (!std::isfinite(options.target_faces) || !std::isfinite(options.edge_length) ||
       !std::isfinite(options.sharp_angle_deg))
     throw Error(ErrorCode::InvalidArgument, "options must be finite numbers");
+  if (!(options.weld_tolerance >= 0) || !std::isfinite(options.weld_tolerance))
+    throw Error(ErrorCode::InvalidArgument, "the weld tolerance must be a finite number >= 0");
   if (options.sharp_angle_deg > 180) throw Error(ErrorCode::InvalidArgument, "sharp angle must be at most 180 degrees");
   for (const auto& e : options.feature_edges)
     if (e[0] < 0 || e[1] < 0 || e[0] >= input_.num_vertices() || e[1] >= input_.num_vertices() || e[0] == e[1])
       throw Error(ErrorCode::InvalidArgument, "feature edge (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
                                                   ") is not a pair of distinct vertices of the mesh");
-  if (options.drop_bad_components != options_.drop_bad_components) {
+  if (options.drop_bad_components != options_.drop_bad_components ||
+      options.weld_tolerance != options_.weld_tolerance ||
+      options.refuse_non_manifold != options_.refuse_non_manifold) {
     intake_.reset();
     components_.clear();
   }
@@ -78,6 +82,8 @@ void Session::run_intake_stage(Progress& progress) {
   if (!intake_) {
     IntakeOptions intake_options;
     intake_options.drop_bad_components = options_.drop_bad_components;
+    intake_options.refuse_non_manifold = options_.refuse_non_manifold;
+    intake_options.weld_tolerance = options_.weld_tolerance;
     intake_ = std::make_unique<IntakeResult>(run_intake(input_, intake_options, progress));
   }
   report_["input"] = *intake_;
@@ -288,7 +294,7 @@ void Session::collect_grid_uvs() {
       for (int k = 0; k < 3; ++k) {
         const int iv = input_vertex(state.mesh.F(f, k));
         for (int j = 0; j < 3; ++j)
-          if (iv >= 0 && input_.face_vertices[input_.face_start[input_face] + j] == iv) {
+          if (iv >= 0 && intake_->weld_target[input_.face_vertices[input_.face_start[input_face] + j]] == iv) {
             corner_uv_[6 * input_face + 2 * j] = igm.to_double(igm.uv[3 * f + k][0]);
             corner_uv_[6 * input_face + 2 * j + 1] = igm.to_double(igm.uv[3 * f + k][1]);
           }
