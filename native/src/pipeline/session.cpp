@@ -374,12 +374,26 @@ void Session::collect_quads(Progress& progress) {
     }
   }
   collect_kept_triangles(failed);
-  QuadMetricsOptions metric_options;
-  metric_options.hausdorff_samples = 20000;
-  // Measured against the components the quads stand for (the kept ones are their own triangles).
-  const TriMesh reference = failed.empty() ? TriMesh() : extract_components(*intake_, quadded);
-  report_["quad"] = compute_quad_metrics(*quads_, failed.empty() ? intake_->mesh : reference, metric_options, progress);
+  report_["quad"] = measure_quads(quadded, failed.empty(), progress);
   report_["timings_s"]["metrics"] = timer.seconds();
+}
+
+Json Session::measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const {
+  // Measured against the components the quads stand for (kept ones are their own triangles), each
+  // quad's flip against its own component (not a part it passes through).
+  QuadMetricsOptions options;
+  options.hausdorff_samples = 20000;
+  std::vector<int> component_of(intake_->mesh.num_faces(), -1);
+  for (size_t c = 0; c < intake_->components.size(); ++c)
+    for (int f : intake_->components[c].faces) component_of[f] = static_cast<int>(c);
+  if (all_quadded) {
+    options.reference_component = std::move(component_of);
+    return compute_quad_metrics(*quads_, intake_->mesh, options, progress);
+  }
+  std::vector<int> face_map;
+  const TriMesh reference = extract_components(*intake_, quadded, nullptr, &face_map);
+  for (int f : face_map) options.reference_component.push_back(component_of[f]);
+  return compute_quad_metrics(*quads_, reference, options, progress);
 }
 
 void Session::collect_kept_triangles(const std::vector<int>& failed) {

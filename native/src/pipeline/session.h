@@ -70,6 +70,8 @@ class Session {
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
   void collect_quads(Progress& progress);
   void collect_kept_triangles(const std::vector<int>& failed);
+  // The quad figures (report "quad") of quads_, the quads of components `quadded`.
+  Json measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const;
   void report_failed_components();
   void throw_if_every_component_failed() const;
   void report_error(const std::string& code, const std::string& message);
