@@ -5,10 +5,11 @@
 
 Imports each mesh (OBJ, PLY, OFF; read by the native reader, polygons kept), runs Quantized Retopo
 (and Integer-Grid UVs with --uv), writes DIR/<name>.obj (and DIR/<name>_uv.obj) and
-DIR/report.json with one entry per input (status, reason, quads, seconds). Any failure of an
+DIR/report.json with one entry per input (status "ok", "partial" (parts of a many-part mesh kept as
+their triangles in the output) or "error"; reason, quads, seconds). Any failure of an
 input (a refused mesh, an unwritable output, a bug) is recorded with its reason and the batch goes
 on with the next input; the report is written whatever failed, and the exit status is 1 if
-anything failed (2 if not even the report could be written).
+anything failed (2 if not even the report could be written), else 3 if an input is partial, else 0.
 """
 import argparse
 import importlib.util
@@ -114,9 +115,13 @@ def process(binding, path, args):
         result = bpy.context.active_object
         if result is source or not result.name.startswith(name + "_quads"):
             raise RuntimeError("the operator did not create a quad object")
-        entry["quads"] = len(result.data.polygons)
-        # The operator selects the quads that face against the source surface.
-        entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
+        figures = result.get("qgp", {})
+        entry["quads"] = len(result.data.polygons) - int(figures.get("kept_triangles", 0))
+        if figures.get("kept_parts", 0):  # complete except parts kept as triangles (selected)
+            entry["status"] = "partial"
+            entry["reason"] = f"{figures['kept_parts']} part(s) kept as {figures['kept_triangles']} triangles"
+        else:  # the operator selects the quads that face against the source surface
+            entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
         write_obj(os.path.join(args.out, name + ".obj"), result)
         if args.uv:
             activate(source)
@@ -162,14 +167,15 @@ def main():
             print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
                   f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
             entries.append(entry)
-    failed = sum(e["status"] != "ok" for e in entries)
+    failed = sum(e["status"] == "error" for e in entries)
+    partial = sum(e["status"] == "partial" for e in entries)
     try:
         with open(os.path.join(args.out, "report.json"), "w") as f:
-            json.dump({"entries": entries, "failed": failed}, f, indent=2)
+            json.dump({"entries": entries, "failed": failed, "partial": partial}, f, indent=2)
     except OSError as e:
         print(f"batch: cannot write the report: {e}", file=sys.stderr, flush=True)
         return 2
-    return 1 if failed else 0
+    return 1 if failed else 3 if partial else 0
 
 
 if __name__ == "__main__":

@@ -52,7 +52,7 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
     takes the material of the source triangle `face_triangle` names. loop_uv: (loops, 2) per face
     corner in face order, written to the UV layer `layer_name`."""
     mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist(), [], faces.tolist())
+    mesh.from_pydata(vertices.tolist(), [], faces if isinstance(faces, list) else faces.tolist())
     for slot in source.material_slots:
         mesh.materials.append(slot.material)
     if len(source.material_slots) > 1 and len(faces):
@@ -79,9 +79,16 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
     return obj
 
 
-def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh):
-    """New object '<source>_quads' with the source's transform, parent, collections and materials."""
-    return _object_like(context, source, source.name + "_quads", vertices, quads, quad_triangle, source_mesh)
+def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh, kept=None):
+    """New object '<source>_quads' with the source's transform, parent, collections and materials.
+    kept: (vertices, triangles, source triangle per triangle) of parts that could not be quadded,
+    added after the quads as triangles."""
+    faces = quads.tolist()
+    if kept is not None and len(kept[1]):
+        faces += (kept[1] + len(vertices)).tolist()
+        vertices = np.concatenate([vertices, kept[0]])
+        quad_triangle = np.concatenate([quad_triangle, kept[2]])
+    return _object_like(context, source, source.name + "_quads", vertices, faces, quad_triangle, source_mesh)
 
 
 def select_faces(mesh, face_ids):

@@ -75,15 +75,26 @@ def _report_figures(report, op, started, **figures):
                 library=binding.version(), **figures)
 
 
+def _failed_parts(failed, shown=3):
+    """The parts a remesh kept as triangles, named with why (the first `shown` of them)."""
+    names = [f"part {f['component']} ({f['stage']}: {f['message']})" for f in failed[:shown]]
+    more = f"; {len(failed) - shown} more in the report" if len(failed) > shown else ""
+    return "; ".join(names) + more
+
+
 def _quad_figures(report):
     """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
     has exactly), where each component's quads come from (quad_paths: 'integer-grid map' or
-    'T-mesh layout (why)'), how many components used the layout, and the quality figures."""
+    'T-mesh layout (why)', or 'kept as triangles'), how many components used the layout, the parts kept
+    as triangles (kept_parts, kept_triangles: added after the quads), and the quality figures."""
     extraction = report.get("extraction", {})
     quad = report.get("quad", {})
+    failed = report.get("failed_components", [])
     return dict(quads_expected=int(report.get("quantization", {}).get("quads_expected", -1)),
                 components=int(report.get("input", {}).get("components", 0)),
-                quad_paths=[str(c.get("path", "")) for c in extraction.get("components", [])],
+                quad_paths=[str(c.get("path", "")) if c else "kept as triangles"
+                            for c in extraction.get("components", [])],
+                kept_parts=len(failed), kept_triangles=sum(int(f["triangles"]) for f in failed),
                 layout_components=int(extraction.get("layout_components", 0)),
                 flipped_quads=int(quad.get("flipped_quads", 0)),
                 hausdorff=float(quad.get("hausdorff", -1.0)))
@@ -165,6 +176,9 @@ class _JobOperator:
             return {"CANCELLED"}
 
 
+_WELD_TOLERANCE = 1e-6  # the native default, relative to the bounding-box diagonal
+
+
 class _TargetProperties:
     """Density and feature options shared by both operators."""
 
@@ -179,6 +193,10 @@ class _TargetProperties:
                                             description="Also keep edges sharper than the angle")
     sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
                                          subtype="ANGLE")
+    weld: bpy.props.BoolProperty(name="Weld Open Edges", default=True,
+                                 description="Join open edges whose vertices coincide (closer than a millionth "
+                                             "of the size), as in meshes split at UV seams or hard normals; "
+                                             "off keeps every loose part apart")
 
     @classmethod
     def poll(cls, context):
@@ -201,6 +219,7 @@ class _TargetProperties:
         else:
             session.set_option("edge_length", self.edge_length)
         session.set_option("fallback_uv_map", 1 if self._wants_fallback_map() else 0)
+        session.set_option("weld_tolerance", _WELD_TOLERANCE if self.weld else 0.0)
         return session
 
     def _wants_fallback_map(self):
@@ -234,6 +253,7 @@ class _TargetProperties:
         sub = row.row()
         sub.active = self.use_sharp_angle
         sub.prop(self, "sharp_angle", text="")
+        layout.prop(self, "weld")
 
 
 class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Operator):
@@ -249,12 +269,20 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
 
     def _finish(self, context):
         vertices, quads, quad_triangle = self._session.quad_mesh()
+        kept_vertices, kept, kept_triangle, _ = self._session.kept_triangles()
         report = self._session.report()
-        obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source)
+        obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source,
+                                              kept=(kept_vertices, kept, kept_triangle))
         obj["qgp"] = _report_figures(report, self, self._started, **_quad_figures(report))
         if not self.keep_source_visible:
             self._source_obj.hide_set(True)
         message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
+        failed = report.get("failed_components", [])
+        if failed:  # the parts kept as triangles are selected, so Edit Mode shows them
+            blender_mesh.select_faces(obj.data, list(range(len(quads), len(quads) + len(kept))))
+            self.report({"WARNING"}, f"{message}; complete except {len(failed)} part(s) kept as their {len(kept)} "
+                                     f"triangles (selected in Edit Mode): {_failed_parts(failed)}")
+            return {"FINISHED"}
         # Quads that face against the source surface (where it folds within one quad) are selected,
         # so Edit Mode shows them; everything else is deselected.
         flipped = blender_mesh.select_faces(obj.data, report.get("quad", {}).get("flipped_quad_ids", []))
@@ -318,7 +346,7 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
                 obj["qgp"] = _report_figures(self._session.report(), self, self._started,
                                              refined_components=int(refined), triangles=len(triangles),
                                              seams=seams)
-                self.report({"INFO"}, message)
+                self._report_uv_outcome(message, "are not in the copy")
                 return {"FINISHED"}
         corner_uv, _ = self._session.grid_uv(len(self._source.triangles))
         mesh = self._source_obj.data
@@ -337,10 +365,16 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
         flipped = igm.get("flipped_triangles", 0)
         if flipped:
             hint = "no flip-free fallback was found" if self.flip_free_copy else "turn on Flip-Free Copy"
-            self.report({"WARNING"}, f"{message}; {flipped} triangle(s) of the map are flipped ({hint})")
-        else:
-            self.report({"INFO"}, message)
+            message += f"; {flipped} triangle(s) of the map are flipped ({hint})"
+        self._report_uv_outcome(message, "got no grid UVs (left at 0, 0)", warn=flipped > 0)
         return {"FINISHED"}
+
+    def _report_uv_outcome(self, message, failed_parts_outcome, warn=False):
+        """INFO, or WARNING when `warn` or when parts of a many-part mesh failed (named, with why)."""
+        failed = self._session.report().get("failed_components", [])
+        if failed:
+            message += f"; {len(failed)} part(s) {failed_parts_outcome}: {_failed_parts(failed)}"
+        self.report({"WARNING"} if warn or failed else {"INFO"}, message)
 
     def draw(self, context):
         self._draw_target(self.layout)

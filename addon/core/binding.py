@@ -110,6 +110,8 @@ def _declare(lib):
     optional = {
         "qgp_result_quad_counts": (c_int, [vp, p_int64, p_int64]),
         "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
+        "qgp_result_kept_counts": (c_int, [vp, p_int64, p_int64]),
+        "qgp_result_kept_fetch": (c_int, [vp, p_double, p_int32, p_int32, p_int32]),
         "qgp_result_uv_counts": (c_int, [vp, p_int64]),
         "qgp_result_uv_fetch": (c_int, [vp, p_double, p_int32]),
         "qgp_result_uv_mesh_counts": (c_int, [vp, p_int64, p_int64, p_int32]),
@@ -304,6 +306,23 @@ class Session(SessionLifetime):
         self._check(self._lib.qgp_result_quad_fetch(self._handle, _ptr(v, ctypes.c_double),
                                                     _ptr(q, ctypes.c_int32), _ptr(src, ctypes.c_int32)))
         return v, q, src
+
+    def kept_triangles(self):
+        """Parts of a many-part mesh the last remesh could not quad, kept as their triangles (the
+        report's failed_components says why): (vertices (n,3) float64, triangles (t,3) int32, source
+        triangle per triangle (t,) int32, component per triangle (t,) int32); empty when every part
+        became quads."""
+        nv, nt = ctypes.c_int64(), ctypes.c_int64()
+        if hasattr(self._lib, "qgp_result_kept_counts"):
+            self._check(self._lib.qgp_result_kept_counts(self._handle, ctypes.byref(nv), ctypes.byref(nt)))
+        v = np.empty((nv.value, 3), np.float64)
+        t = np.empty((nt.value, 3), np.int32)
+        src = np.empty(nt.value, np.int32)
+        comp = np.empty(nt.value, np.int32)
+        if nt.value:
+            self._check(self._lib.qgp_result_kept_fetch(self._handle, _ptr(v, ctypes.c_double), _ptr(t, ctypes.c_int32),
+                                                        _ptr(src, ctypes.c_int32), _ptr(comp, ctypes.c_int32)))
+        return v, t, src, comp
 
     def grid_uv(self, num_triangles):
         """Integer-grid map per input triangle corner, (num_triangles, 3, 2) float64 (1 unit = 1 quad;

@@ -203,6 +203,9 @@ class WorkerSession(binding.SessionLifetime):
     def quad_mesh(self):
         return self._call("quad_mesh")
 
+    def kept_triangles(self):
+        return self._call("kept_triangles")
+
     def grid_uv(self, num_triangles):
         return self._call("grid_uv", num_triangles)
 

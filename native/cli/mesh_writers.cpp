@@ -46,7 +46,19 @@ void write_obj(const std::string& path, const TriMesh& mesh,
   if (std::ferror(out) || std::fflush(out) != 0) throw std::runtime_error("cannot write '" + path + "'");
 }
 
-void write_quad_obj(const std::string& path, const QuadMesh& quads, const std::string& header) {
+// Appends the triangles of components kept as triangles, their vertices numbered after `offset`.
+void write_kept_triangles(FILE* out, const TriMesh& kept, const std::vector<int>& kept_component, int offset) {
+  for (int v = 0; v < kept.num_vertices(); ++v)
+    std::fprintf(out, "v %.17g %.17g %.17g\n", kept.V(v, 0), kept.V(v, 1), kept.V(v, 2));
+  for (int f = 0; f < kept.num_faces(); ++f) {
+    const int c = kept_component[f];
+    if (f == 0 || c != kept_component[f - 1]) std::fprintf(out, "o component_%d_triangles\n", c);
+    std::fprintf(out, "f %d %d %d\n", kept.F(f, 0) + offset + 1, kept.F(f, 1) + offset + 1, kept.F(f, 2) + offset + 1);
+  }
+}
+
+void write_quad_obj(const std::string& path, const QuadMesh& quads, const TriMesh* kept,
+                    const std::vector<int>& kept_component, const std::string& header) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "w"), &std::fclose);
   if (!file) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
   FILE* out = file.get();
@@ -60,6 +72,7 @@ void write_quad_obj(const std::string& path, const QuadMesh& quads, const std::s
     if (q == 0 || (!quads.component.empty() && c != quads.component[q - 1])) std::fprintf(out, "o component_%d\n", c);
     std::fprintf(out, "f %d %d %d %d\n", quads.Q(q, 0) + 1, quads.Q(q, 1) + 1, quads.Q(q, 2) + 1, quads.Q(q, 3) + 1);
   }
+  if (kept) write_kept_triangles(out, *kept, kept_component, quads.num_vertices());
   if (std::ferror(out) || std::fflush(out) != 0) throw std::runtime_error("cannot write '" + path + "'");
 }
 

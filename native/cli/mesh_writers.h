@@ -1,6 +1,7 @@
 // Output files of the qgp CLI.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/parametrization.h"
@@ -15,8 +16,11 @@ namespace qgp::cli {
 void write_obj(const std::string& path, const TriMesh& mesh,
                const Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>* corner_uv, const std::string& header);
 
-// Writes a quad mesh as Wavefront OBJ (faces counter-clockwise), header as for write_obj.
-// Throws std::runtime_error if the file cannot be written.
-void write_quad_obj(const std::string& path, const QuadMesh& quads, const std::string& header);
+// Writes a quad mesh as Wavefront OBJ (faces counter-clockwise), one object per component
+// ("component_N"), header as for write_obj. kept (may be null): triangles of components that could
+// not be quadded, written after the quads as objects "component_N_triangles" (kept_component: #F of
+// kept, the component of each). Throws std::runtime_error if the file cannot be written.
+void write_quad_obj(const std::string& path, const QuadMesh& quads, const TriMesh* kept,
+                    const std::vector<int>& kept_component, const std::string& header);
 
 }  // namespace qgp::cli

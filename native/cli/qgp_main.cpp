@@ -3,7 +3,8 @@
 // Exit codes: 0 success, 1 bad command line (or an output that cannot be written), 2 unusable
 // input (with a one-line reason on stderr), 3 a pipeline stage failed or was cancelled, 4 internal
 // error (also when the process is ended from inside a library, e.g. MUMPS calling exit, or by a
-// fatal signal: see report_abnormal_ends).
+// fatal signal: see report_abnormal_ends), 5 complete except named parts: a component of a many-part
+// mesh could not be quadded and is written as its triangles (report: failed_components).
 #include <signal.h>
 #include <unistd.h>
 
@@ -193,6 +194,12 @@ int exit_code_for(qgp::ErrorCode code) {
   }
 }
 
+const qgp::ComponentState& first_quadded(const qgp::Session& session) {
+  for (const auto& c : session.components())
+    if (!c.failure) return c;
+  return session.components().front();
+}
+
 // --uv-out: the map as its own mesh (pipeline/uv_mesh.h): the integer-grid map when every
 // component has one, else the continuous seamless map.
 void write_uv_output(const std::string& path, const qgp::Session& session, qgp::UvMapKind kind) {
@@ -202,15 +209,19 @@ void write_uv_output(const std::string& path, const qgp::Session& session, qgp::
     header << "qgp integer-grid map: per-corner vt, 1 uv unit = 1 quad";
   else
     header << "qgp seamless map (continuous, before quantization): per-corner vt, 1 uv unit = "
-           << session.components()[0].seamless_edge_length() << " model units";
+           << first_quadded(session).seamless_edge_length() << " model units";
   qgp::cli::write_obj(path, out.mesh, &out.uv, header.str());
 }
 
-// --layout-out: the T-mesh (motorcycle graph) of every component as OBJ polylines.
+// --layout-out: the T-mesh (motorcycle graph) of every component (but those kept as triangles) as
+// OBJ polylines.
 bool has_layout(const qgp::Session& session) {
-  bool complete = !session.components().empty();
-  for (const auto& c : session.components())
-    complete = complete && c.seamless_is_current() && c.traced.computed_from(c.seamless.id());
+  bool complete = false;
+  for (const auto& c : session.components()) {
+    if (c.failure) continue;
+    if (!c.seamless_is_current() || !c.traced.computed_from(c.seamless.id())) return false;
+    complete = true;
+  }
   return complete;
 }
 
@@ -218,6 +229,7 @@ void write_layout_output(const std::string& path, const qgp::Session& session) {
   std::vector<const qgp::TriMesh*> meshes;
   std::vector<const qgp::TMesh*> tmeshes;
   for (const auto& c : session.components()) {
+    if (c.failure) continue;
     meshes.push_back(&c.mesh);
     tmeshes.push_back(&c.traced->tmesh);
   }
@@ -264,6 +276,17 @@ void print_remesh_summary(const qgp::Json& report) {
               << "0-based face order of the output); the surface folds within them\n";
 }
 
+// Names the components kept as triangles (stderr); true if there are any.
+bool print_failed_components(const qgp::Json& report) {
+  const qgp::Json failed = report.value("failed_components", qgp::Json::array());
+  for (const auto& f : failed)
+    std::cerr << "qgp: component " << f["component"] << " (" << f["triangles"]
+              << " triangles) kept as triangles: " << f["stage"].get<std::string>() << ": "
+              << f["message"].get<std::string>() << "\n";
+  if (!failed.empty()) std::cerr << "qgp: complete except " << failed.size() << " component(s) written as triangles\n";
+  return !failed.empty();
+}
+
 int run(const CommandLine& cl) {
   qgp::Json report;
   std::unique_ptr<qgp::Session> session;
@@ -299,7 +322,8 @@ int run(const CommandLine& cl) {
     try {
       std::ostringstream header;
       header << "qgp quad mesh of " << cl.input;
-      qgp::cli::write_quad_obj(cl.output, *session->quad_result(), header.str());
+      qgp::cli::write_quad_obj(cl.output, *session->quad_result(), session->kept_triangles(), session->kept_component(),
+                               header.str());
     } catch (const std::exception& e) {
       std::cerr << "qgp: " << e.what() << "\n";
       written = false;
@@ -308,7 +332,8 @@ int run(const CommandLine& cl) {
   }
   written = write_optional_outputs(cl, session.get(), false) && written;
   written = write_report(cl.report, report) && written;
-  return written ? 0 : 1;
+  if (!written) return 1;
+  return print_failed_components(report) ? 5 : 0;
 }
 
 }  // namespace

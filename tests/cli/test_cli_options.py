@@ -3,11 +3,13 @@
 
 Exit codes: 0 success, 1 bad command line, a features file that says nothing usable or an output
 that cannot be written, 2 unusable input (also with --uv-out / --layout-out asked), 3 a stage
-failed. Outputs are read back: the -o quad mesh (only quads, edge-manifold, the input's Euler
-characteristic, as many faces as the report says), the --layout-out polylines (one per T-edge),
+failed, 5 complete except named parts. Outputs are read back: the -o quad mesh (only quads,
+edge-manifold, the input's Euler characteristic, as many faces as the report says), the
+--layout-out polylines (one per T-edge),
 features from --sharp-angle and --features (counted here independently from the input's dihedral
 angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, and the
-welding of a triangle soup (--no-weld).
+welding of a triangle soup (--no-weld), and a many-part mesh some of whose parts cannot be quadded
+(exit 5, kept as triangles).
 """
 import argparse
 import json
@@ -230,6 +232,36 @@ def test_weld(qgp, meshes, tmp):
     check(proc.returncode == 0 and inp["components"] == len(faces), "--no-weld keeps the soup's triangles apart")
 
 
+def test_partial(qgp, meshes, tmp):
+    """Parts that cannot be quadded are kept as their triangles; every other part is written (exit 5)."""
+    out, report = os.path.join(tmp, "featuretype.obj"), os.path.join(tmp, "featuretype.json")
+    proc = run(qgp, "remesh", os.path.join(meshes, "featuretype.ply"), "--no-weld", "-o", out, "--faces", 2000,
+               "--report", report)
+    r = json.load(open(report))
+    failed = r.get("failed_components", [])
+    check(proc.returncode == 5 and r["status"] == "partial" and failed and r["error"] is None,
+          f"featuretype unwelded ({r['input']['components']} parts): exit 5, status partial "
+          f"({len(failed)} part(s) failed)")
+    check(all(f"component {f['component']} ({f['triangles']} triangles) kept as triangles: {f['stage']}: "
+              f"{f['message']}" in proc.stderr for f in failed) and "complete except" in proc.stderr,
+          "stderr names every part kept as triangles, with its stage and reason")
+    vertices, faces, _ = read_obj(out)
+    objects = [line.split()[1] for line in open(out) if line.startswith("o ")]
+    quads = [f for f in faces if len(f) == 4]
+    triangles = [f for f in faces if len(f) == 3]
+    check(len(quads) == r["quad"]["faces"] and len(quads) + len(triangles) == len(faces),
+          f"-o: the report's {len(quads)} quads, then only triangles")
+    check(len(triangles) == sum(f["triangles"] for f in failed)
+          and [f"component_{f['component']}_triangles" for f in failed] == objects[-len(failed):],
+          "-o: each failed part as its own object of its triangles, after the quads")
+    check(len(objects) == r["input"]["components"], "-o: every other part is an object of quads")
+    check(all(0 <= i < len(vertices) for f in faces for i in f), "-o: indices in range")
+    check(all(len(fs) <= 2 for fs in edge_faces(quads).values()) and r["quad"]["non_manifold_edges"] == 0
+          and r["quad"]["inconsistent_edges"] == 0, "-o: the quads are edge-manifold and consistently oriented")
+    check(all(r["extraction"]["components"][f["component"]] is None for f in failed),
+          "report: a failed part has no extraction entry (null)")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--qgp", required=True)
@@ -237,7 +269,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
-                     test_features, test_drop_bad_components, test_weld):
+                     test_features, test_drop_bad_components, test_weld, test_partial):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)

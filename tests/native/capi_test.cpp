@@ -276,6 +276,10 @@ TEST(CApi, RemeshJobGivesTheQuadsItReports) {
   for (int32_t v : quads) EXPECT_TRUE(v >= 0 && v < nv);
   for (int32_t f : source) EXPECT_TRUE(f >= 0 && f < 72);                           // a face of the 6 x 6 grid
   for (size_t i = 0; i < vertices.size(); i += 3) EXPECT_EQ(vertices[i + 2], 0.0);  // in the plane
+  int64_t kept_nv = -1, kept_nt = -1;  // one part, quadded: nothing kept as triangles
+  ASSERT_EQ(qgp_result_kept_counts(s, &kept_nv, &kept_nt), QGP_OK);
+  EXPECT_EQ(kept_nv, 0);
+  EXPECT_EQ(kept_nt, 0);
   qgp_session_free(s);
 }
 
@@ -340,6 +344,48 @@ TEST(CApi, CreateFromFile) {
   qgp_session_free(s);
   EXPECT_EQ(qgp_session_create_from_file("/nonexistent.obj", &s), QGP_ERR_UNREADABLE_FILE);
   EXPECT_NE(std::string(qgp_last_error()).find("does not exist"), std::string::npos);
+}
+
+// featuretype unwelded is 852 parts; a few cannot be quadded (T-mesh tracing fails on them). The job
+// still ends OK: its report says "partial" and names them, the quads of every other part and the
+// kept parts' triangles are both fetched, and the grid-UV job leaves the kept parts without a map.
+TEST(CApiMeshes, PartsThatCannotBeQuaddedAreKeptAsTriangles) {
+  qgp_session* s = nullptr;
+  ASSERT_EQ(qgp_session_create_from_file((std::string(QGP_MESH_DIR) + "/featuretype.ply").c_str(), &s), QGP_OK);
+  ASSERT_EQ(qgp_session_set_option(s, "weld_tolerance", 0), QGP_OK);
+  ASSERT_EQ(qgp_session_set_option(s, "target_faces", 2000), QGP_OK);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  int state = -1;
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["status"], "partial");
+  const qgp::Json& failed = report["failed_components"];
+  ASSERT_FALSE(failed.empty());
+  int64_t failed_triangles = 0;
+  for (const auto& f : failed) {
+    EXPECT_FALSE(f["message"].get<std::string>().empty());
+    EXPECT_TRUE(report["extraction"]["components"][f["component"].get<int>()].is_null());
+    failed_triangles += f["triangles"].get<int64_t>();
+  }
+  int64_t nq = 0, nv = 0, kept_nv = 0, kept_nt = 0;
+  ASSERT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_OK);
+  EXPECT_EQ(nq, report["quad"]["faces"].get<int64_t>());
+  ASSERT_EQ(qgp_result_kept_counts(s, &kept_nv, &kept_nt), QGP_OK);
+  EXPECT_EQ(kept_nt, failed_triangles);
+  std::vector<double> vertices(3 * kept_nv);
+  std::vector<int32_t> triangles(3 * kept_nt), source(kept_nt), component(kept_nt);
+  ASSERT_EQ(qgp_result_kept_fetch(s, vertices.data(), triangles.data(), source.data(), component.data()), QGP_OK);
+  for (int32_t v : triangles) EXPECT_TRUE(v >= 0 && v < kept_nv);
+  for (int32_t f : source) EXPECT_GE(f, 0);
+  for (int32_t c : component) {
+    bool named = false;
+    for (const auto& f : failed) named = named || f["component"].get<int>() == c;
+    EXPECT_TRUE(named) << c;
+  }
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_GRID_UV), QGP_OK);
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  EXPECT_EQ(qgp::Json::parse(report_of(s))["status"], "partial");
+  qgp_session_free(s);
 }
 
 // The grid-UV job with "fallback_uv_map": on joint at 500 quads, whose global map stays flipped,

@@ -1149,5 +1149,33 @@ TEST(QuadExtraction, BenchmarkHundredThousandQuads) {
   }
 }
 
+// Two parts 0.01 apart facing each other (a thin shell's two sides, or interpenetrating parts): a
+// quad of the lower part lying just above its own surface is closer to the upper part, whose
+// normal points the other way. Judged against its own part it is not flipped; against the whole
+// surface it would be.
+TEST(QuadMetrics, AQuadIsJudgedAgainstItsOwnPart) {
+  TriMesh two;
+  two.V.resize(8, 3);
+  two.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,         // part 0 at z = 0, normal +z
+      0, 0, 0.01, 1, 0, 0.01, 1, 1, 0.01, 0, 1, 0.01;  // part 1 at z = 0.01, normal -z
+  two.F.resize(4, 3);
+  two.F << 0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6;
+  build_connectivity(two);
+  QuadMesh quad;
+  quad.V.resize(4, 3);
+  quad.V << 0.2, 0.2, 0.006, 0.8, 0.2, 0.006, 0.8, 0.8, 0.006, 0.2, 0.8, 0.006;  // normal +z, nearer part 1
+  quad.Q.resize(1, 4);
+  quad.Q << 0, 1, 2, 3;
+  quad.component = {0};
+  Progress progress;
+  QuadMetricsOptions options;
+  options.hausdorff = false;
+  EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 1);  // one surface
+  options.reference_component = {0, 0, 1, 1};
+  EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 0);  // its own part
+  quad.component = {1};  // claimed by the part facing -z, it is flipped
+  EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 1);
+}
+
 }  // namespace
 }  // namespace qgp

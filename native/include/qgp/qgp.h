@@ -117,6 +117,14 @@ QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* tr
 QGP_API int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_quads);
 QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads, int32_t* source_face);
 
+/* The components of a many-part mesh that the last remesh job could not quad (the report's
+ * "status" is "partial" and "failed_components" says why), kept as their repaired triangles:
+ * counts (0 and 0 when every component was quadded), then vertices (nv x 3), triangles (nt x 3),
+ * per triangle its input face and its component (nt each). QGP_ERR_NOT_READY as for the quads. */
+QGP_API int qgp_result_kept_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles);
+QGP_API int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* source_face,
+                                  int32_t* component);
+
 /* The integer-grid map of the last successful grid-UV or remesh job, per corner of the input
  * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; a triangle intake removed gets the map of
  * its nearest kept one at its corners; NaN only on parts remeshed on a decimated working mesh);

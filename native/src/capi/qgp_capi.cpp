@@ -393,6 +393,38 @@ int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads
   });
 }
 
+int qgp_result_kept_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    if (!session->session->quad_result())
+      throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    const qgp::TriMesh* kept = session->session->kept_triangles();
+    if (num_vertices) *num_vertices = kept ? kept->num_vertices() : 0;
+    if (num_triangles) *num_triangles = kept ? kept->num_faces() : 0;
+    return QGP_OK;
+  });
+}
+
+int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* source_face,
+                          int32_t* component) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    if (!session->session->quad_result())
+      throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    const qgp::TriMesh* kept = session->session->kept_triangles();
+    if (!kept) return QGP_OK;
+    if (vertices) std::memcpy(vertices, kept->V.data(), sizeof(double) * 3 * kept->V.rows());
+    if (triangles) std::memcpy(triangles, kept->F.data(), sizeof(int32_t) * 3 * kept->F.rows());
+    const auto& src = session->session->kept_source_face();
+    const auto& comp = session->session->kept_component();
+    if (source_face) std::copy(src.begin(), src.end(), source_face);
+    if (component) std::copy(comp.begin(), comp.end(), component);
+    return QGP_OK;
+  });
+}
+
 int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");

@@ -259,7 +259,14 @@ std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<
 
 TriMesh extract_component(const IntakeResult& intake, int component, std::vector<int>* vertex_map,
                           std::vector<int>* face_map) {
-  const std::vector<int>& faces = intake.components.at(component).faces;
+  return extract_components(intake, {component}, vertex_map, face_map);
+}
+
+TriMesh extract_components(const IntakeResult& intake, const std::vector<int>& components, std::vector<int>* vertex_map,
+                           std::vector<int>* face_map) {
+  std::vector<int> faces;
+  for (int c : components)
+    faces.insert(faces.end(), intake.components.at(c).faces.begin(), intake.components.at(c).faces.end());
   std::vector<int> local(intake.mesh.num_vertices(), -1), to_global;
   TriMesh m;
   m.F.resize(static_cast<int>(faces.size()), 3);
@@ -276,7 +283,7 @@ TriMesh extract_component(const IntakeResult& intake, int component, std::vector
   for (size_t v = 0; v < to_global.size(); ++v) m.V.row(v) = intake.mesh.V.row(to_global[v]);
   build_connectivity(m);
   if (vertex_map) *vertex_map = std::move(to_global);
-  if (face_map) *face_map = faces;
+  if (face_map) *face_map = std::move(faces);
   return m;
 }
 

@@ -72,5 +72,8 @@ std::vector<char> map_input_edges(const IntakeResult& intake, const std::vector<
 // receive, per component vertex / face, the index in intake.mesh.
 TriMesh extract_component(const IntakeResult& intake, int component, std::vector<int>* vertex_map = nullptr,
                           std::vector<int>* face_map = nullptr);
+// Several components (in the given order) as one mesh, likewise.
+TriMesh extract_components(const IntakeResult& intake, const std::vector<int>& components,
+                           std::vector<int>* vertex_map = nullptr, std::vector<int>* face_map = nullptr);
 
 }  // namespace qgp

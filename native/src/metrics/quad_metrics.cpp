@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <optional>
 #include <random>
 #include <unordered_map>
 
@@ -139,6 +142,55 @@ bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBv
   return !(normal.dot(quad_reference_normal(p, reference, reference_bvh)) > 0);
 }
 
+namespace {
+
+// The reference surface per part, each with its own BVH, for judging a quad against its own part.
+class PartSurfaces {
+ public:
+  PartSurfaces(const TriMesh& reference, const std::vector<int>& face_part) {
+    std::vector<std::vector<int>> faces;
+    for (int f = 0; f < reference.num_faces(); ++f) {
+      const int part = face_part[f];
+      if (part < 0) continue;
+      if (part >= static_cast<int>(faces.size())) faces.resize(part + 1);
+      faces[part].push_back(f);
+    }
+    for (const std::vector<int>& part_faces : faces) {
+      meshes_.push_back(part_mesh(reference, part_faces));
+      bvhs_.push_back(std::make_unique<TriangleBvh>(meshes_.back()));
+    }
+  }
+  // Null for a part without reference faces.
+  const TriMesh* mesh(int part) const { return has(part) ? &meshes_[part] : nullptr; }
+  const TriangleBvh* bvh(int part) const { return has(part) ? bvhs_[part].get() : nullptr; }
+
+ private:
+  bool has(int part) const {
+    return part >= 0 && part < static_cast<int>(meshes_.size()) && meshes_[part].num_faces() > 0;
+  }
+  // The faces as a mesh of their own: positions and triangles only (face normals need no more).
+  static TriMesh part_mesh(const TriMesh& reference, const std::vector<int>& faces) {
+    TriMesh m;
+    std::vector<int> local(reference.num_vertices(), -1);
+    int n = 0;
+    m.F.resize(static_cast<int>(faces.size()), 3);
+    for (size_t i = 0; i < faces.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        int& v = local[reference.F(faces[i], k)];
+        if (v < 0) v = n++;
+        m.F(static_cast<int>(i), k) = v;
+      }
+    m.V.resize(n, 3);
+    for (int v = 0; v < reference.num_vertices(); ++v)
+      if (local[v] >= 0) m.V.row(local[v]) = reference.V.row(v);
+    return m;
+  }
+  std::deque<TriMesh> meshes_;
+  std::vector<std::unique_ptr<TriangleBvh>> bvhs_;
+};
+
+}  // namespace
+
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,
                                  Progress& progress) {
   QuadMetrics m;
@@ -146,6 +198,9 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
   m.irregular_vertices = m.topology.irregular_interior + m.topology.irregular_boundary;
   const int nq = quads.num_quads();
   const TriangleBvh reference_bvh(reference);
+  const bool by_part = !options.reference_component.empty() && !quads.component.empty();
+  std::optional<PartSurfaces> parts;
+  if (by_part) parts.emplace(reference, options.reference_component);
 
   std::vector<double> deviations;
   deviations.reserve(4 * static_cast<size_t>(nq));
@@ -163,7 +218,9 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
       const double angle = l > 0 ? std::acos(std::clamp(e1.dot(e2) / l, -1.0, 1.0)) * 180 / M_PI : 0;
       deviations.push_back(std::abs(angle - 90));
     }
-    if (quad_is_flipped(p, reference, reference_bvh)) m.flipped_quad_ids.push_back(q);
+    const TriMesh* own = by_part ? parts->mesh(quads.component[q]) : nullptr;
+    if (own ? quad_is_flipped(p, *own, *parts->bvh(quads.component[q])) : quad_is_flipped(p, reference, reference_bvh))
+      m.flipped_quad_ids.push_back(q);
   }
   if (!deviations.empty()) {
     double sum = 0;

@@ -40,6 +40,10 @@ struct QuadMetricsOptions {
   bool hausdorff = true;           // sample the two-sided Hausdorff distance
   int hausdorff_samples = 100000;  // random surface samples per direction (plus all vertices)
   uint32_t seed = 1;
+  // Per reference face, the part it belongs to (empty: one part). With it and QuadMesh::component,
+  // a quad's flip is judged against its own part's surface only, not a part it passes close to
+  // (interpenetrating parts: teeth in a jaw, a strap through a buckle).
+  std::vector<int> reference_component;
 };
 
 struct QuadMetrics {

@@ -7,6 +7,7 @@
 #include <tuple>
 #include <vector>
 
+#include "core/error.h"
 #include "core/mesh.h"
 #include "core/parametrization.h"
 #include "cross_field/cross_field.h"
@@ -73,6 +74,14 @@ struct QuadChoice {
   UntangleStats untangle;   // flipped quads unfolded after extraction
 };
 
+// Why a component of a many-part mesh could not be quadded in the last run: it is kept as its
+// triangles, and every other component is still quadded.
+struct PartFailure {
+  std::string stage;  // the stage that failed (a progress stage name, e.g. "tmesh")
+  ErrorCode code = ErrorCode::StageFailed;
+  std::string message;
+};
+
 struct SeamlessKey {
   uint64_t cut = 0;
   double edge_length = 0;  // target quad edge length the map was solved for (1 uv unit)
@@ -111,6 +120,8 @@ struct ComponentState {
   StageResult<IgmResult, uint64_t> igm;             // quantization
   StageResult<CellMapFallback, uint64_t> cell_map;  // igm
   StageResult<QuadChoice, uint64_t> quads;          // igm
+  // Set when a stage failed on this component in the last run; later stages skip it.
+  std::optional<PartFailure> failure;
 
   // Model units per uv unit of the seamless map.
   double seamless_edge_length() const { return seamless.key().edge_length; }

@@ -266,7 +266,7 @@ QuadChoice choose_quads(const ComponentState& state, Progress& progress) {
   std::optional<QuadChoice> layout = quads_of_the_layout(state, progress, &defects, &collapsed);
   if (!chosen && !layout)
     throw Error(ErrorCode::StageFailed,
-                "quad extraction: the quads do not form a valid mesh (" + defects + "); no output was written" +
+                "quad extraction: the quads do not form a valid mesh (" + defects + ")" +
                     (collapsed ? ". A hole or handle of this part is narrower than one quad: try more quads" : ""));
   if (layout && (!chosen || layout->untangle.flipped_after < chosen->untangle.flipped_after)) {
     if (chosen)

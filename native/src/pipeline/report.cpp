@@ -8,6 +8,18 @@
 
 namespace qgp {
 
+namespace {
+
+// A component that failed at or before the stage being reported has no result of it: its entry in
+// the per-component list is null (report: failed_components says why).
+bool failed_before_report(const ComponentState& state, Json& per_component) {
+  if (!state.failure) return false;
+  per_component.push_back(nullptr);
+  return true;
+}
+
+}  // namespace
+
 void to_json(Json& j, const CellMapFallback& fallback) {
   if (!fallback.ran) {
     j = nullptr;
@@ -52,6 +64,7 @@ Json field_report(const std::vector<ComponentState>& components) {
   int singularities = 0, index_quarters = 0, euler = 0, feature_edges = 0, cut_edges = 0, overconstrained = 0,
       collapsed = 0;
   for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
     const CrossField& field = *state.field;
     int features = 0;
     for (char f : field.feature_edge) features += f;
@@ -81,8 +94,11 @@ Json seamless_report(const std::vector<ComponentState>& components, double edge_
   Json per_component = Json::array();
   int flipped = 0, degenerate = 0, iterations = 0;
   double residual = 0, energy = 0;
+  double seamless_edge_length = edge_length;
   for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
     const SeamlessMapStats& s = state.seamless->stats;
+    seamless_edge_length = state.seamless_edge_length();
     per_component.push_back(s);
     flipped += s.flipped_triangles;
     degenerate += s.degenerate_triangles;
@@ -90,12 +106,9 @@ Json seamless_report(const std::vector<ComponentState>& components, double edge_
     residual = std::max(residual, s.max_transition_residual);
     energy += s.energy;
   }
-  Json j = {{"flipped_triangles", flipped},
-            {"degenerate_triangles", degenerate},
-            {"max_transition_residual", residual},
-            {"energy", energy},
-            {"ipopt_iterations", iterations},
-            {"edge_length", components.empty() ? edge_length : components[0].seamless_edge_length()},
+  Json j = {{"flipped_triangles", flipped},          {"degenerate_triangles", degenerate},
+            {"max_transition_residual", residual},   {"energy", energy},
+            {"ipopt_iterations", iterations},        {"edge_length", seamless_edge_length},
             {"components", std::move(per_component)}};
   if (flipped + degenerate > 0)
     j["warnings"].push_back(std::to_string(flipped) + " flipped and " + std::to_string(degenerate) +
@@ -105,10 +118,12 @@ Json seamless_report(const std::vector<ComponentState>& components, double edge_
 
 Json tmesh_report(const std::vector<ComponentState>& components) {
   Json per_component = Json::array();
-  for (const ComponentState& state : components) per_component.push_back(state.traced->tmesh);
   Json total = {{"nodes", 0}, {"edges", 0}, {"cells", 0}, {"singular_nodes", 0}};
-  for (const Json& r : per_component)
-    for (auto& [key, value] : total.items()) value = value.get<int64_t>() + r.value(key, int64_t(0));
+  for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
+    per_component.push_back(state.traced->tmesh);
+    for (auto& [key, value] : total.items()) value = value.get<int64_t>() + per_component.back().value(key, int64_t(0));
+  }
   total["components"] = std::move(per_component);
   return total;
 }
@@ -117,6 +132,7 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
   Json per_component = Json::array();
   int64_t quads = 0;
   for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
     const Quantized& q = *state.quantization;
     quads += q.result.quads_expected;
     per_component.push_back(q.result);
@@ -131,6 +147,7 @@ Json igm_report(const std::vector<ComponentState>& components) {
   int flipped = 0, degenerate = 0, wound = 0, fallbacks = 0, cell_maps = 0;
   double residual = 0;
   for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
     const IgmStats& s = state.igm->stats;
     const bool cell_map = state.cell_map.computed_from(state.igm.id()) && state.cell_map->ran;
     flipped += s.flipped_triangles;
@@ -155,6 +172,7 @@ Json extraction_report(const std::vector<ComponentState>& components, Json& igm)
   Json per_component = Json::array();
   int from_layout = 0;
   for (const ComponentState& state : components) {
+    if (failed_before_report(state, per_component)) continue;
     per_component.push_back(*state.quads);
     from_layout += state.quads->source == QuadSource::TMeshLayout;
   }

@@ -47,6 +47,8 @@ void Session::run(Job job, Progress& progress) {
   report_ = Json::object();
   quads_.reset();
   quad_source_face_.clear();
+  kept_triangles_.reset();
+  kept_source_face_.clear();
   corner_uv_.clear();
   cut_edges_.clear();
   report_["status"] = "ok";
@@ -173,6 +175,12 @@ void Session::add_preparation_repairs() {
                                            " feature edge(s) are not edges of the repaired mesh and were ignored");
 }
 
+// A stage failure of one component of a many-part mesh: the component is kept as its triangles and
+// the others go on. A cancel, a bad option, or a failure of the only component ends the job.
+bool part_failure_is_kept(const Error& e, size_t num_components) {
+  return num_components > 1 && e.code() != ErrorCode::Cancelled && e.code() != ErrorCode::InvalidArgument;
+}
+
 template <class Body>
 void Session::for_each_component(const char* stage, Progress& progress, Body body) {
   Timer timer;
@@ -183,18 +191,31 @@ void Session::for_each_component(const char* stage, Progress& progress, Body bod
     ComponentState& state = components_[c];
     progress.set_range(done / faces, (done + state.mesh.num_faces()) / faces);
     done += state.mesh.num_faces();
+    if (state.failure) continue;
     try {
       body(state);
     } catch (const Error& e) {
-      if (components_.size() <= 1 || e.code() == ErrorCode::Cancelled) throw;
-      throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
+      if (!part_failure_is_kept(e, components_.size())) {
+        if (components_.size() <= 1 || e.code() == ErrorCode::Cancelled) throw;
+        throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
+      }
+      state.failure = PartFailure{stage, e.code(), e.what()};
     }
   }
   report_["timings_s"][stage] = timer.seconds();
+  throw_if_every_component_failed();
+}
+
+void Session::throw_if_every_component_failed() const {
+  for (const ComponentState& state : components_)
+    if (!state.failure) return;
+  const PartFailure& first = *components_.front().failure;
+  throw Error(first.code, "component 0: " + first.message + " (and every other component failed as well)");
 }
 
 void Session::run_remesh_stages(Job job, Progress& progress) {
   prepare_components(job, progress);
+  for (ComponentState& state : components_) state.failure.reset();
   report_["working_mesh"] = working_mesh_report(components_);
   add_preparation_repairs();
   const double edge_length = target_edge_length();
@@ -220,6 +241,23 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   }
   collect_grid_uvs();
   if (job == Job::Remesh) collect_quads(progress);
+  report_failed_components();
+}
+
+void Session::report_failed_components() {
+  Json failed = Json::array();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    const std::optional<PartFailure>& failure = components_[c].failure;
+    if (!failure) continue;
+    failed.push_back({{"component", c},
+                      {"triangles", intake_->components[c].faces.size()},
+                      {"stage", failure->stage},
+                      {"code", error_code_name(failure->code)},
+                      {"message", failure->message}});
+  }
+  if (failed.empty()) return;
+  report_["status"] = "partial";
+  report_["failed_components"] = std::move(failed);
 }
 
 void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from) {
@@ -229,13 +267,16 @@ void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& ma
   // affinely: one chart, a (nearly) degenerate uv triangle where the 3D one is. Triangles of
   // components remeshed on a decimated working mesh stay NaN (their map is not on these triangles).
   std::vector<std::unique_ptr<TriangleBvh>> bvh(components_.size());
-  std::vector<char> kept(input_.num_faces(), 0);
+  std::vector<char> kept(input_.num_faces(), 0), failed(input_.num_faces(), 0);
   for (int f : intake_->input_face) kept[f] = 1;
+  for (size_t c = 0; c < components_.size(); ++c)
+    if (components_[c].failure)
+      for (int f : intake_->components[c].faces) failed[intake_->input_face[f]] = 1;
   for (int f = 0; f < input_.num_faces(); ++f) {
     if (input_.face_size(f) != 3) continue;
     bool missing = false;
     for (int i = 0; i < 6; ++i) missing = missing || std::isnan(corner_uv_[6 * f + i]);
-    if (!missing || (kept[f] && made_from[f].first < 0)) continue;
+    if (!missing || failed[f] || (kept[f] && made_from[f].first < 0)) continue;
     Vec3 corner[3], centroid = Vec3::Zero();
     for (int j = 0; j < 3; ++j)
       centroid += corner[j] = input_.positions[input_.face_vertices[input_.face_start[f] + j]];
@@ -244,7 +285,7 @@ void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& ma
     if (component < 0) {
       double nearest = std::numeric_limits<double>::infinity();
       for (size_t c = 0; c < components_.size(); ++c) {
-        if (components_[c].full_mesh || !components_[c].igm.has_value()) continue;
+        if (components_[c].full_mesh || components_[c].failure || !components_[c].igm.has_value()) continue;
         if (!bvh[c]) bvh[c] = std::make_unique<TriangleBvh>(components_[c].mesh);
         const TriangleBvh::Hit h = bvh[c]->closest_point(centroid);
         if (h.triangle >= 0 && h.squared_distance < nearest)
@@ -281,7 +322,7 @@ void Session::collect_grid_uvs() {
   std::vector<std::pair<int, int>> made_from(input_.num_faces(), {-1, -1});  // (component, face)
   for (size_t c = 0; c < components_.size(); ++c) {
     const ComponentState& state = components_[c];
-    if (state.full_mesh) continue;  // the map lives on the working mesh, not on the input triangles
+    if (state.full_mesh || state.failure) continue;  // no map on the input triangles
     const ExactParametrization& igm = state.igm->map;
     auto input_vertex = [&](int v) {
       const int iv = state.vertex_map[v];
@@ -319,8 +360,11 @@ void Session::collect_quads(Progress& progress) {
   Timer timer;
   progress.begin_stage("metrics");
   quads_ = std::make_unique<QuadMesh>();
+  std::vector<int> quadded, failed;
   for (size_t c = 0; c < components_.size(); ++c) {
     const ComponentState& state = components_[c];
+    (state.failure ? failed : quadded).push_back(static_cast<int>(c));
+    if (state.failure) continue;
     const QuadMesh& part = state.quads->extraction.quads;
     append_quad_mesh(*quads_, part, static_cast<int>(c));
     for (int q = 0; q < part.num_quads(); ++q) {
@@ -329,10 +373,38 @@ void Session::collect_quads(Progress& progress) {
       quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[face_map[f]]);
     }
   }
-  QuadMetricsOptions metric_options;
-  metric_options.hausdorff_samples = 20000;
-  report_["quad"] = compute_quad_metrics(*quads_, intake_->mesh, metric_options, progress);
+  collect_kept_triangles(failed);
+  report_["quad"] = measure_quads(quadded, failed.empty(), progress);
   report_["timings_s"]["metrics"] = timer.seconds();
+}
+
+Json Session::measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const {
+  // Measured against the components the quads stand for (kept ones are their own triangles), each
+  // quad's flip against its own component (not a part it passes through).
+  QuadMetricsOptions options;
+  options.hausdorff_samples = 20000;
+  std::vector<int> component_of(intake_->mesh.num_faces(), -1);
+  for (size_t c = 0; c < intake_->components.size(); ++c)
+    for (int f : intake_->components[c].faces) component_of[f] = static_cast<int>(c);
+  if (all_quadded) {
+    options.reference_component = std::move(component_of);
+    return compute_quad_metrics(*quads_, intake_->mesh, options, progress);
+  }
+  std::vector<int> face_map;
+  const TriMesh reference = extract_components(*intake_, quadded, nullptr, &face_map);
+  for (int f : face_map) options.reference_component.push_back(component_of[f]);
+  return compute_quad_metrics(*quads_, reference, options, progress);
+}
+
+void Session::collect_kept_triangles(const std::vector<int>& failed) {
+  kept_triangles_.reset();
+  kept_source_face_.clear();
+  kept_component_.clear();
+  if (failed.empty()) return;
+  std::vector<int> face_map;
+  kept_triangles_ = std::make_unique<TriMesh>(extract_components(*intake_, failed, nullptr, &face_map));
+  for (int f : face_map) kept_source_face_.push_back(intake_->input_face[f]);
+  for (int c : failed) kept_component_.insert(kept_component_.end(), intake_->components[c].faces.size(), c);
 }
 
 }  // namespace qgp

@@ -43,6 +43,11 @@ class Session {
   // Quad mesh over all components; quad_source_face: per quad the input face it lies on.
   const QuadMesh* quad_result() const { return quads_ ? quads_.get() : nullptr; }
   const std::vector<int>& quad_source_face() const { return quad_source_face_; }
+  // Components that could not be quadded (report: failed_components), kept as their repaired
+  // triangles (null when every component was quadded); per triangle its input face and component.
+  const TriMesh* kept_triangles() const { return kept_triangles_.get(); }
+  const std::vector<int>& kept_source_face() const { return kept_source_face_; }
+  const std::vector<int>& kept_component() const { return kept_component_; }
   // Integer-grid map per input triangle corner (#input faces x 3 x 2, 1 unit = 1 quad; NaN where
   // intake removed the face) and the cut edges as input vertex pairs.
   const std::vector<double>& corner_uv() const { return corner_uv_; }
@@ -64,6 +69,11 @@ class Session {
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
   void collect_quads(Progress& progress);
+  void collect_kept_triangles(const std::vector<int>& failed);
+  // The quad figures (report "quad") of quads_, the quads of components `quadded`.
+  Json measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const;
+  void report_failed_components();
+  void throw_if_every_component_failed() const;
   void report_error(const std::string& code, const std::string& message);
 
   PolygonSoup input_;
@@ -74,6 +84,8 @@ class Session {
   Json report_;
   std::unique_ptr<QuadMesh> quads_;
   std::vector<int> quad_source_face_;
+  std::unique_ptr<TriMesh> kept_triangles_;
+  std::vector<int> kept_source_face_, kept_component_;
   std::vector<double> corner_uv_;
   std::vector<std::array<int, 2>> cut_edges_;
 };

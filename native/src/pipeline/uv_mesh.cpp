@@ -7,13 +7,15 @@ namespace qgp {
 
 bool available_uv_map(const Session& session, UvMapKind* kind) {
   if (session.intake() == nullptr || session.components().empty()) return false;
-  bool igm = true, seamless = true;
+  bool igm = true, seamless = true, any = false;
   for (const ComponentState& c : session.components()) {
+    if (c.failure) continue;  // kept as triangles: not in the uv mesh
+    any = true;
     igm = igm && c.igm_is_current();
     seamless = seamless && c.seamless_is_current();
   }
   if (kind) *kind = igm ? UvMapKind::IntegerGrid : UvMapKind::Seamless;
-  return igm || seamless;
+  return any && (igm || seamless);
 }
 
 UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
@@ -32,6 +34,7 @@ UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
   UvMesh out;
   int num_vertices = intake.mesh.num_vertices(), num_faces = 0;
   for (const ComponentState& c : session.components()) {
+    if (c.failure) continue;
     for (int v : c.vertex_map) num_vertices += v < 0;
     num_vertices += mesh_of(c).num_vertices() - c.mesh.num_vertices();
     num_faces += mesh_of(c).num_faces();
@@ -44,6 +47,7 @@ UvMesh compose_uv_mesh(const Session& session, UvMapKind kind) {
   out.source_face.assign(num_faces, -1);
   int next_vertex = intake.mesh.num_vertices(), face = 0;
   for (const ComponentState& c : session.components()) {
+    if (c.failure) continue;
     const TriMesh& mesh = mesh_of(c);
     std::vector<int> id(mesh.num_vertices());
     for (int v = 0; v < mesh.num_vertices(); ++v) {

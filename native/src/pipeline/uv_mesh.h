@@ -25,7 +25,8 @@ struct UvMesh {
   int refined_components = 0;    // components written with the T-mesh inserted
 };
 
-// Which map every component of the session has: IntegerGrid if all have one, else Seamless if all
+// Which map every component of the session has (components that failed and are kept as triangles
+// aside: they are not in the uv mesh): IntegerGrid if all have one, else Seamless if all
 // have that; false if neither (e.g. after an intake-only job).
 bool available_uv_map(const Session& session, UvMapKind* kind);
 
