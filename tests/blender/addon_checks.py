@@ -248,11 +248,12 @@ def run_grid_uv(operators, obj, target, per_unit):
     return len(uv), len(seams), residual
 
 
-def run_batch(command, inputs, out, *options, env=None):
+def run_batch(command, inputs, out, *options, timeout=None):
     """Runs the batch script (command: the interpreter and script up to its `--`) on `inputs` into
-    `out`; returns (process, report). The report must exist whatever failed."""
+    `out`; returns (process, report). The report must exist whatever failed. timeout: seconds, after
+    which the batch is ended and the test fails (subprocess.TimeoutExpired)."""
     proc = subprocess.run(command + inputs + ["--out", out] + list(options), capture_output=True, text=True,
-                          env=env)
+                          timeout=timeout)
     path = os.path.join(out, "report.json")
     assert os.path.exists(path), f"no report (exit {proc.returncode}): {proc.stderr[-2000:]}"
     with open(path) as f:
