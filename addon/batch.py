@@ -3,6 +3,8 @@
     blender -b --factory-startup --python addon/batch.py -- IN [IN ...] --out DIR
             [--faces N | --edge-length L] [--sharp-angle DEG] [--uv] [--quads-per-unit Q]
 
+or, with Blender as a Python module (PyPI's bpy, 4.2 and later), `python addon/batch.py -- IN ...`.
+
 Imports each mesh (OBJ, PLY, OFF; read by the native reader, polygons kept), runs Quantized Retopo
 (and Integer-Grid UVs with --uv), writes DIR/<name>.obj (and DIR/<name>_uv.obj) and
 DIR/report.json with one entry per input (status "ok", "partial" (parts of a many-part mesh kept as
@@ -38,9 +40,10 @@ def parse_args():
 
 
 def load_addon():
-    """The registered add-on if it is enabled, else this folder's add-on, registered now."""
+    """(package, registered here): the registered add-on if it is enabled, else this folder's add-on,
+    registered now (the caller unregisters it: see main)."""
     if hasattr(bpy.types, "OBJECT_OT_qgp_quad_remesh"):
-        return sys.modules[bpy.types.OBJECT_OT_qgp_quad_remesh.__module__.rsplit(".", 1)[0]]
+        return sys.modules[bpy.types.OBJECT_OT_qgp_quad_remesh.__module__.rsplit(".", 1)[0]], False
     here = os.path.dirname(os.path.abspath(__file__))
     spec = importlib.util.spec_from_file_location("quantized_retopo", os.path.join(here, "__init__.py"),
                                                   submodule_search_locations=[here])
@@ -48,27 +51,15 @@ def load_addon():
     sys.modules["quantized_retopo"] = module
     spec.loader.exec_module(module)
     module.register()
-    return module
+    return module, True
 
 
-def new_object(name, vertices, faces):
-    """A mesh object linked to the scene from vertices ((n,3) array or list) and faces (index lists)."""
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist() if hasattr(vertices, "tolist") else vertices, [], faces)
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new(name, mesh)
+def import_mesh(blender_mesh, path):
+    """The mesh file as a new object linked to the scene."""
+    mesh = blender_mesh.read_mesh(path)
+    obj = bpy.data.objects.new(mesh.name, mesh)
     bpy.context.scene.collection.objects.link(obj)
     return obj
-
-
-def import_mesh(binding, path):
-    vertices, sizes, corners = binding.read_mesh_file(path)
-    starts = [0]
-    for n in sizes.tolist():
-        starts.append(starts[-1] + n)
-    flat = corners.tolist()
-    faces = [flat[starts[i]:starts[i + 1]] for i in range(len(sizes))]
-    return new_object(os.path.splitext(os.path.basename(path))[0], vertices, faces)
 
 
 def activate(obj):
@@ -104,11 +95,11 @@ def target_kwargs(args):
     return kwargs
 
 
-def process(binding, path, args):
+def process(binding, blender_mesh, path, args):
     entry = {"input": path, "status": "ok", "reason": "", "quads": 0, "flipped_quads": 0, "seconds": 0.0}
     start = time.perf_counter()
     try:
-        source = import_mesh(binding, path)
+        source = import_mesh(blender_mesh, path)
         name = source.name
         activate(source)
         bpy.ops.object.qgp_quad_remesh(**target_kwargs(args), keep_source_visible=True)
@@ -154,19 +145,26 @@ def main():
     entries = []
     try:
         os.makedirs(args.out, exist_ok=True)
-        addon = load_addon()
+        addon, registered = load_addon()
         binding = importlib.import_module(addon.__name__ + ".core.binding")
+        blender_mesh = importlib.import_module(addon.__name__ + ".blender_mesh")
     except Exception as e:  # no input can run: each is recorded with the reason
         traceback.print_exc()
         reason = f"the batch could not start: {type(e).__name__}: {e}"
         entries = [{"input": path, "status": "error", "reason": reason, "quads": 0, "flipped_quads": 0,
                     "seconds": 0.0} for path in args.inputs]
     else:
-        for path in args.inputs:
-            entry = process(binding, path, args)
-            print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
-                  f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
-            entries.append(entry)
+        try:
+            for path in args.inputs:
+                entry = process(binding, blender_mesh, path, args)
+                print(f"batch: {os.path.basename(path)}: {entry['status']} {entry['reason']} "
+                      f"{entry['quads']} quads ({entry['flipped_quads']} flipped) {entry['seconds']} s", flush=True)
+                entries.append(entry)
+        finally:
+            # What this script registered, it unregisters (which also ends the worker processes):
+            # Blender 4.5 as a Python module (PyPI's bpy) hangs at exit while an operator is registered.
+            if registered:
+                addon.unregister()
     failed = sum(e["status"] == "error" for e in entries)
     partial = sum(e["status"] == "partial" for e in entries)
     try:

@@ -1,8 +1,10 @@
 """Blender glue: reading a mesh object's data for the native library and writing results back."""
+import os
+
 import bpy
 import numpy as np
 
-from .core import meshdata
+from .core import binding, meshdata
 
 
 def sharp_edge_flags(mesh):
@@ -46,13 +48,37 @@ class SourceMesh:
         return hash((self.vertices.tobytes(), self.triangles.tobytes(), self.features.tobytes()))
 
 
+def new_mesh(name, vertices, faces):
+    """A new mesh from vertex positions and faces (vertex index lists); its edges derived.
+    Blender 5.0.1's Mesh.from_pydata leaves the edge selection attribute '.select_edge' with the
+    type of the edge vertices (INT32_2D), and writing an edge selection into it crashes Blender
+    (select_faces does): such an attribute is removed (Blender makes a boolean one when an edge
+    selection is written)."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices, [], faces)
+    mesh.update(calc_edges=True)
+    attribute = mesh.attributes.get(".select_edge")
+    if attribute is not None and attribute.data_type != "BOOLEAN":
+        mesh.attributes.remove(attribute)
+    return mesh
+
+
+def read_mesh(path):
+    """A new mesh named after the file from an OBJ, PLY or OFF file, read by the native reader
+    (polygons kept)."""
+    vertices, sizes, corners = binding.read_mesh_file(path)
+    starts = np.concatenate(([0], np.cumsum(sizes)))
+    flat = corners.tolist()
+    faces = [flat[starts[i]:starts[i + 1]] for i in range(len(sizes))]
+    return new_mesh(os.path.splitext(os.path.basename(path))[0], vertices.tolist(), faces)
+
+
 def _object_like(context, source, name, vertices, faces, face_triangle, source_mesh, loop_uv=None,
                  layer_name=None):
     """New object `name` with the source's transform, parent, collections and materials; each face
     takes the material of the source triangle `face_triangle` names. loop_uv: (loops, 2) per face
     corner in face order, written to the UV layer `layer_name`."""
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(vertices.tolist(), [], faces if isinstance(faces, list) else faces.tolist())
+    mesh = new_mesh(name, vertices.tolist(), faces if isinstance(faces, list) else faces.tolist())
     for slot in source.material_slots:
         mesh.materials.append(slot.material)
     if len(source.material_slots) > 1 and len(faces):
@@ -63,7 +89,6 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
         layer = mesh.uv_layers.new(name=layer_name)
         layer.data.foreach_set("uv", loop_uv.astype(np.float32).reshape(-1))
         mesh.uv_layers.active = layer
-    mesh.update(calc_edges=True)
     mesh.validate(clean_customdata=False)
     obj = bpy.data.objects.new(name, mesh)
     obj.parent = source.parent

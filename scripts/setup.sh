@@ -9,6 +9,7 @@ PACKAGES=(
   libcli11-dev                         # the CLI's argument parser
   libgtest-dev                         # tests
   blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
+  python3-venv                         # scripts/setup_bpy.sh: Blender 4.5 and 5.0 as Python modules
   libopenblas0-serial                  # optimized BLAS for MUMPS (Ipopt) factorizations: about 2x faster
   patchelf zip unzip                   # extension packaging
   xvfb xauth                           # a real Blender window for the modal-operator test

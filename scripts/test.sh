@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README command 2: set up, build, and run every test:
 #   0. code checks (cheap, first): function length, C++ format, Python style,
-#   1. the Release build's ctest suite (native GoogleTest, CLI over the mesh set, Blender tests),
+#   1. the Release build's ctest suite (native GoogleTest, CLI over the mesh set, Blender tests: the
+#      Debian binary 3.4 and PyPI's bpy module 4.5 and 5.0),
 #   2. the native and CLI tests built with AddressSanitizer + UndefinedBehaviorSanitizer (every suite
 #      but the long real-mesh sweeps named in SWEEPS, which run in pass 1),
 #   3. the libFuzzer targets for a bounded time from their seed corpora.
@@ -9,7 +10,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
-./scripts/build.sh
+./scripts/setup_bpy.sh  # Blender 4.5 and 5.0 as Python modules (PyPI), for the blender_module_* tests
+./scripts/build.sh -DQGP_BPY_TESTS=ON
 
 echo "== code checks"
 /usr/bin/python3 scripts/check_function_length.py --build build

@@ -4,19 +4,29 @@ enabled, then exercised through its operators, panel, menu and batch runner."""
 import contextlib
 import glob
 import io
-import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from addon_checks import (check_quad_object, check_sharp_edges_kept, grid_seam_residual,  # noqa: E402
+                          mark_sharp_edges, reset_scene, run_batch, run_grid_uv, run_quad_remesh, scene_state,
+                          seam_edges, select_only, uv_cut_edges)
+import addon_checks  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-MESHES = ARGS[ARGS.index("--meshes") + 1] if "--meshes" in ARGS else os.path.join(REPO, "..", "shared", "meshes")
+ARGS = addon_checks.script_arguments()
+MESHES = addon_checks.argument(ARGS, "--meshes", os.path.join(REPO, "..", "shared", "meshes"))
 MODULE = "quantized_retopo"
+# The batch script of this checkout in Blender 3.4 (it registers the add-on in addon/ itself).
+BATCH = [bpy.app.binary_path, "-b", "--factory-startup", "--python", os.path.join(REPO, "addon", "batch.py"), "--"]
+
+
+def import_mesh(binding, name):
+    return addon_checks.import_mesh(binding, os.path.join(MESHES, name))
 
 
 def install_addon():
@@ -31,44 +41,6 @@ def install_addon():
     installed = os.path.join(bpy.utils.user_resource("SCRIPTS"), "addons", MODULE)
     assert os.path.exists(os.path.join(installed, "lib", "libqgp.so")), "native library not installed"
     return sys.modules[MODULE]
-
-
-def reset_scene():
-    """Empties the scene (read_factory_settings would also disable the add-on)."""
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    for mesh in list(bpy.data.meshes):
-        bpy.data.meshes.remove(mesh)
-
-
-def scene_state():
-    """Everything an operator could change: objects, their data, selection, UV layers, seams."""
-    state = []
-    for obj in sorted(bpy.data.objects, key=lambda o: o.name):
-        entry = [obj.name, obj.type, obj.select_get(), obj.hide_get(), tuple(map(tuple, obj.matrix_world))]
-        if obj.type == "MESH":
-            m = obj.data
-            entry += [len(m.vertices), len(m.polygons), [layer.name for layer in m.uv_layers],
-                      hash(tuple(v.co[:] for v in m.vertices)), sum(e.use_seam for e in m.edges)]
-        state.append(entry)
-    return state, len(bpy.data.meshes)
-
-
-def import_mesh(binding, name):
-    vertices, sizes, corners = binding.read_mesh_file(os.path.join(MESHES, name))
-    starts = [0]
-    for n in sizes.tolist():
-        starts.append(starts[-1] + n)
-    flat = corners.tolist()
-    mesh = bpy.data.meshes.new(name.split(".")[0])
-    mesh.from_pydata(vertices.tolist(), [], [flat[starts[i]:starts[i + 1]] for i in range(len(sizes))])
-    obj = bpy.data.objects.new(mesh.name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    for other in bpy.context.selected_objects:
-        other.select_set(False)
-    obj.select_set(True)
-    bpy.context.view_layer.objects.active = obj
-    return obj
 
 
 def expect_operator_error(op, **kwargs):
@@ -264,46 +236,6 @@ def test_worker_start_failure_warns():
     print(f"worker start failure: {len(quad.data.polygons)} quads and grid UVs in-process, warned: {warnings[0][:90]}")
 
 
-def euler_characteristic(mesh):
-    return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
-
-
-def mark_sharp_edges(obj, angle):
-    """Marks the edges whose faces meet at more than `angle` (radians) as sharp, as a user would."""
-    import bmesh
-    bm = bmesh.new()
-    bm.from_mesh(obj.data)
-    count = 0
-    for edge in bm.edges:
-        sharp = edge.is_manifold and edge.calc_face_angle(0.0) > angle
-        edge.smooth = not sharp
-        count += sharp
-    bm.to_mesh(obj.data)
-    bm.free()
-    return count
-
-
-def measure_against_source(binding, source, quad, sharp_angle):
-    """The library's own measurement of the quads against the source triangles (dict: flipped
-    quads, Hausdorff distance, share of the sharp edges' length covered by quad edges, ...)."""
-    import numpy as np
-    src = source.data
-    src.calc_loop_triangles()
-    tris = np.array([t.vertices[:] for t in src.loop_triangles], np.int32)
-    sv = np.array([v.co[:] for v in src.vertices])
-    qv = np.array([v.co[:] for v in quad.data.vertices])
-    sizes = np.array([len(p.vertices) for p in quad.data.polygons], np.int32)
-    corners = np.array([i for p in quad.data.polygons for i in p.vertices], np.int32)
-    return binding.measure_polygon_mesh(qv, sizes, corners, sv, tris, math.degrees(sharp_angle))
-
-
-def select_only(obj):
-    for other in bpy.context.selected_objects:
-        other.select_set(False)
-    obj.select_set(True)
-    bpy.context.view_layer.objects.active = obj
-
-
 def test_quad_remesh(binding):
     """Suzanne (subdivided), a torus, camelhead (open), fandisk with its sharp edges marked and a CAD
     part with the angle option: a new all-quad object next to an untouched source, with the
@@ -336,48 +268,15 @@ def test_quad_remesh(binding):
             c.objects.unlink(source)
         collection.objects.link(source)
     for source, target, options in cases:
-        select_only(source)
-        before_source = [e for e in scene_state()[0] if e[0] == source.name]
-        names = {o.name for o in bpy.data.objects}
-        result = bpy.ops.object.qgp_quad_remesh(target_faces=target, **options)
-        assert result == {"FINISHED"}, result
-        created = [o for o in bpy.data.objects if o.name not in names]
-        assert len(created) == 1, created
-        quad = created[0]
-        assert quad.name == source.name + "_quads", quad.name
-        assert bpy.context.view_layer.objects.active == quad and quad.select_get()
+        quad = run_quad_remesh(source, target_faces=target, **options)
         assert [c.name for c in quad.users_collection] == ["qgp_test_collection"], quad.users_collection
         assert [m.name for m in quad.data.materials] == ["qgp_test_material"], list(quad.data.materials)
-        after_source = [e for e in scene_state()[0] if e[0] == source.name]
-        assert after_source[0][4:] == before_source[0][4:], "source data changed"
-        sizes = {len(p.vertices) for p in quad.data.polygons}
-        assert sizes == {4}, f"not all quads: {sizes}"
-        # The native report's figures on the object: the mesh has exactly the quads the quantization
-        # counted (its integer cell areas, before any quad was extracted): none lost or added between
-        # the library and Blender.
-        figures = quad["qgp"].to_dict()
+        figures = check_quad_object(binding, source, quad, target)
         n = len(quad.data.polygons)
-        assert n == figures["quads_expected"], (source.name, n, figures)
-        assert figures["target_mode"] == "FACES" and figures["target"] == target, figures
-        assert len(figures["quad_paths"]) == figures["components"] >= 1, figures
-        assert figures["layout_components"] == sum(p.startswith("T-mesh layout") for p in figures["quad_paths"])
-        assert figures["seconds"] > 0 and figures["library"] == binding.version(), figures
-        assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
-            euler_characteristic(quad.data), euler_characteristic(source.data))
-        bpy.context.view_layer.update()
-        assert quad.parent == source.parent, (quad.parent, source.parent)
-        assert all(abs(a - b) < 1e-6 for ra, rb in zip(quad.matrix_world, source.matrix_world)
-                   for a, b in zip(ra, rb)), (
-            quad.matrix_world, source.matrix_world)
         extra = ""
         if options.get("use_marked_sharp"):
-            # The marked edges are exactly those sharper than 40 degrees: the library measures how
-            # much of their length quad edges cover (within 0.1 % of the diagonal).
-            m = measure_against_source(binding, source, quad, math.radians(40))
-            assert m["sharp_edges"] == marked, (m["sharp_edges"], marked)
-            assert m["sharp_edge_coverage"] > 0.95, m["sharp_edge_coverage"]
-            assert m["flipped_quads"] == 0, m["flipped_quads"]
-            extra = f", {100 * m['sharp_edge_coverage']:.1f} % of the marked sharp edges covered, no flipped quad"
+            coverage = check_sharp_edges_kept(binding, source, quad, marked, math.radians(40))
+            extra = f", {100 * coverage:.1f} % of the marked sharp edges covered, no flipped quad"
         # The operator selects the quads that face against the source, and only those: none here.
         selected = sum(p.select for p in quad.data.polygons)
         assert selected == 0 == figures["flipped_quads"], (selected, figures)
@@ -494,71 +393,6 @@ def test_select_faces():
     print("select_faces: exactly the listed quads")
 
 
-def grid_seam_residual(mesh, layer, quads_per_unit):
-    """Largest deviation, over all edges shared by two polygons, of the UV transition from a
-    90-degree rotation plus an integer translation (in grid units): 0 for an integer-grid map."""
-    uv = [(d.uv[0] * quads_per_unit, d.uv[1] * quads_per_unit) for d in layer.data]
-    sides = {}
-    for poly in mesh.polygons:
-        loops = list(poly.loop_indices)
-        for i, li in enumerate(loops):
-            lj = loops[(i + 1) % len(loops)]
-            a, b = mesh.loops[li].vertex_index, mesh.loops[lj].vertex_index
-            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
-
-    def rotate(p, r):
-        return p if r == 0 else rotate((-p[1], p[0]), r - 1)
-
-    worst = 0.0
-    for (a, b), pair in sides.items():
-        if len(pair) != 2:
-            continue
-        p, q = pair
-        d = (p[b][0] - p[a][0], p[b][1] - p[a][1])
-        e = (q[b][0] - q[a][0], q[b][1] - q[a][1])
-        best = math.inf
-        for r in range(4):
-            rd = rotate(d, r)
-            if abs(rd[0] - e[0]) + abs(rd[1] - e[1]) > 1e-3:
-                continue
-            ra = rotate(p[a], r)
-            t = (q[a][0] - ra[0], q[a][1] - ra[1])
-            best = min(best, abs(t[0] - round(t[0])) + abs(t[1] - round(t[1])))
-        worst = max(worst, best)
-    return worst
-
-
-def uv_cut_edges(mesh, layer, tolerance=1e-4):
-    """Vertex pairs of the edges whose two polygons disagree in the UV layer (by more than
-    `tolerance` in a coordinate at one end): the UV islands' inner boundaries, derived here from the
-    loops on their own (not by the add-on's code)."""
-    uv = [d.uv[:] for d in layer.data]
-    loop_vertex = [loop.vertex_index for loop in mesh.loops]
-    sides = {}
-    for poly in mesh.polygons:
-        loops = list(poly.loop_indices)
-        for i, li in enumerate(loops):
-            lj = loops[(i + 1) % len(loops)]
-            a, b = loop_vertex[li], loop_vertex[lj]
-            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
-    return {key for key, pair in sides.items() for other in pair[1:]
-            if any(abs(other[v][k] - pair[0][v][k]) > tolerance for v in key for k in (0, 1))}
-
-
-def seam_edges(mesh):
-    return {tuple(sorted(e.vertices)) for e in mesh.edges if e.use_seam}
-
-
-def native_cut_edges(obj):
-    """The map's cut edges as the native session of the object's last Integer-Grid UVs run lists
-    them (vertex pairs), restricted to the mesh's edges (a cut may run along a polygon's diagonal)."""
-    operators = sys.modules[MODULE + ".operators"]
-    obj.data.calc_loop_triangles()
-    _, cuts = operators._session_cache[obj.name][1].grid_uv(len(obj.data.loop_triangles))
-    edges = {tuple(sorted(e.vertices)) for e in obj.data.edges}
-    return {(min(a, b), max(a, b)) for a, b in cuts.tolist()} & edges
-
-
 def test_grid_uv(binding):
     reset_scene()
     bpy.ops.mesh.primitive_monkey_add()
@@ -573,29 +407,8 @@ def test_grid_uv(binding):
     mark_sharp_edges(fandisk, math.radians(40))  # the operator uses marked sharp edges by default
     cases.append((fandisk, 2000, 1.0))
     for obj, target, per_unit in cases:
-        select_only(obj)
-        vertices_before = [tuple(v.co) for v in obj.data.vertices]
-        result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit,
-                                            flip_free_copy=False)
-        assert result == {"FINISHED"}, result
-        layer = obj.data.uv_layers.get("QGP Grid")
-        assert layer is not None, [layer.name for layer in obj.data.uv_layers]
-        uv = [tuple(d.uv) for d in layer.data]
-        assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
-        assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
-        assert [tuple(v.co) for v in obj.data.vertices] == vertices_before, "geometry changed"
-        # Mark Seams: the seams are exactly the UV islands' inner boundaries, which include every
-        # cut edge the library lists.
-        seams = seam_edges(obj.data)
-        islands = uv_cut_edges(obj.data, layer, 1e-4 / per_unit)
-        assert seams and seams == islands, (len(seams), len(islands), len(seams - islands), len(islands - seams))
-        cuts = native_cut_edges(obj)
-        assert cuts and cuts <= seams, len(cuts - seams)
-        seams = len(seams)
-        # Float32 UVs: the residual is at the level of float precision, not of the grid.
-        residual = grid_seam_residual(obj.data, layer, per_unit)
-        assert residual < 1e-3, residual
-        print(f"{obj.name}: grid UVs on {len(uv)} loops, {seams} seams, transition residual {residual:.2e}")
+        loops, seams, residual = run_grid_uv(sys.modules[MODULE + ".operators"], obj, target, per_unit)
+        print(f"{obj.name}: grid UVs on {loops} loops, {seams} seams, transition residual {residual:.2e}")
 
 
 def test_grid_uv_seams_off():
@@ -677,10 +490,7 @@ def test_batch():
     for name, width in (("moebius_a.obj", 0.3), ("moebius_b.obj", 0.5)):  # non-orientable: refused
         inputs.append(os.path.join(sources, name))
         write_obj(inputs[-1], *moebius_strip(width=width))
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
-                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out, "--faces", "300"],
-                          capture_output=True, text=True)
-    report = json.load(open(os.path.join(out, "report.json")))
+    proc, report = run_batch(BATCH, inputs, out, "--faces", "300")
     assert proc.returncode != 0, "batch must exit non-zero when an input fails"
     assert [os.path.basename(e["input"]) for e in report["entries"]] == ["moebius_a.obj", "moebius_b.obj"]
     for e in report["entries"]:
@@ -692,11 +502,7 @@ def test_batch():
 def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off", "joint.obj")]
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
-                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs
-                          + ["--out", out, "--faces", "500", "--uv"],
-                          capture_output=True, text=True)
-    report = json.load(open(os.path.join(out, "report.json")))
+    proc, report = run_batch(BATCH, inputs, out, "--faces", "500", "--uv")
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
     # truck: no longer refused at intake (its non-manifold edges are cut); at 500 quads the parts
     # whose holes are narrower than a quad are kept as triangles, as `qgp remesh truck.obj --faces 500`
@@ -747,20 +553,11 @@ def test_parts_kept_as_triangles(binding):
           f"{warnings[0][:100]}")
 
 
-def run_batch(inputs, out, *options):
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python",
-                           os.path.join(REPO, "addon", "batch.py"), "--"] + inputs + ["--out", out] + list(options),
-                          capture_output=True, text=True)
-    path = os.path.join(out, "report.json")
-    assert os.path.exists(path), f"no report (exit {proc.returncode}): {proc.stderr[-2000:]}"
-    with open(path) as f:
-        return proc, json.load(f)
-
-
 def test_batch_all_ok():
     """Every input succeeds: exit status 0, every entry ok with its quads, the files written."""
     out = tempfile.mkdtemp(prefix="qgp_batch_")
-    proc, report = run_batch([os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out, "--faces", "300")
+    proc, report = run_batch(BATCH, [os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out,
+                             "--faces", "300")
     assert proc.returncode == 0, (proc.returncode, report, proc.stderr[-2000:])
     assert report["failed"] == 0 and [e["status"] for e in report["entries"]] == ["ok", "ok"], report
     for e in report["entries"]:
@@ -776,7 +573,8 @@ def test_batch_unexpected_failure():
     report is written and the exit status is non-zero."""
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     os.mkdir(os.path.join(out, "torus.obj"))  # the output file of the first input cannot be written
-    proc, report = run_batch([os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out, "--faces", "300")
+    proc, report = run_batch(BATCH, [os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off")], out,
+                             "--faces", "300")
     assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])
     entries = {os.path.basename(e["input"]): e for e in report["entries"]}
     assert list(entries) == ["torus.obj", "bunny.off"] and report["failed"] == 1, report

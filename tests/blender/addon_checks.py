@@ -1,0 +1,269 @@
+"""Helpers shared by the add-on tests inside Blender: the binary (test_addon.py, Blender 3.4) and the
+Python module (module/test_extension_module.py, PyPI's bpy 4.5 and 5.0). Scene set-up, the checks
+of an operator's result, and the batch runner. Needs bpy; imports nothing of the add-on itself (the
+add-on's package name differs: `quantized_retopo` as a legacy add-on, `bl_ext.<repo>.quantized_retopo`
+as an extension)."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import bpy
+
+
+def reset_scene():
+    """Empties the scene (read_factory_settings would also disable the add-on)."""
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    for mesh in list(bpy.data.meshes):
+        bpy.data.meshes.remove(mesh)
+
+
+def scene_state():
+    """Everything an operator could change: objects, their data, selection, UV layers, seams."""
+    state = []
+    for obj in sorted(bpy.data.objects, key=lambda o: o.name):
+        entry = [obj.name, obj.type, obj.select_get(), obj.hide_get(), tuple(map(tuple, obj.matrix_world))]
+        if obj.type == "MESH":
+            m = obj.data
+            entry += [len(m.vertices), len(m.polygons), [layer.name for layer in m.uv_layers],
+                      hash(tuple(v.co[:] for v in m.vertices)), sum(e.use_seam for e in m.edges)]
+        state.append(entry)
+    return state, len(bpy.data.meshes)
+
+
+def object_state(obj):
+    """scene_state's entry of one object, without its selection and visibility."""
+    return [e for e in scene_state()[0] if e[0] == obj.name][0][4:]
+
+
+def select_only(obj):
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
+def import_mesh(binding, path):
+    """A new object from a mesh file (read by the add-on's native reader, polygons kept), linked to
+    the scene, selected and active."""
+    # The add-on's reader; its package is the binding's, two levels up.
+    mesh = sys.modules[binding.__name__.rsplit(".", 2)[0] + ".blender_mesh"].read_mesh(path)
+    obj = bpy.data.objects.new(mesh.name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    select_only(obj)
+    return obj
+
+
+def euler_characteristic(mesh):
+    return len(mesh.vertices) - len(mesh.edges) + len(mesh.polygons)
+
+
+def mark_sharp_edges(obj, angle):
+    """Marks the edges whose faces meet at more than `angle` (radians) as sharp, as a user would."""
+    import bmesh
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    count = 0
+    for edge in bm.edges:
+        sharp = edge.is_manifold and edge.calc_face_angle(0.0) > angle
+        edge.smooth = not sharp
+        count += sharp
+    bm.to_mesh(obj.data)
+    bm.free()
+    return count
+
+
+def measure_against_source(binding, source, quad, sharp_angle):
+    """The library's own measurement of the quads against the source triangles (dict: flipped
+    quads, Hausdorff distance, share of the sharp edges' length covered by quad edges, ...)."""
+    import numpy as np
+    src = source.data
+    src.calc_loop_triangles()
+    tris = np.array([t.vertices[:] for t in src.loop_triangles], np.int32)
+    sv = np.array([v.co[:] for v in src.vertices])
+    qv = np.array([v.co[:] for v in quad.data.vertices])
+    sizes = np.array([len(p.vertices) for p in quad.data.polygons], np.int32)
+    corners = np.array([i for p in quad.data.polygons for i in p.vertices], np.int32)
+    return binding.measure_polygon_mesh(qv, sizes, corners, sv, tris, math.degrees(sharp_angle))
+
+
+def edge_face_counts(mesh):
+    """How many polygons use each edge (vertex pair) of the mesh's polygons."""
+    counts = {}
+    for poly in mesh.polygons:
+        for key in poly.edge_keys:
+            key = tuple(sorted(key))
+            counts[key] = counts.get(key, 0) + 1
+    return counts
+
+
+def run_quad_remesh(source, **options):
+    """Runs Quantized Retopo on `source`: it finishes with one new object '<source>_quads', selected
+    and active, and the source's data unchanged. Returns the new object."""
+    select_only(source)
+    before = object_state(source)
+    names = {o.name for o in bpy.data.objects}
+    result = bpy.ops.object.qgp_quad_remesh(**options)
+    assert result == {"FINISHED"}, result
+    created = [o for o in bpy.data.objects if o.name not in names]
+    assert len(created) == 1, created
+    quad = created[0]
+    assert quad.name == source.name + "_quads", quad.name
+    assert bpy.context.view_layer.objects.active == quad and quad.select_get()
+    assert object_state(source) == before, "source data changed"
+    return quad
+
+
+def check_quad_object(binding, source, quad, target):
+    """The checks every quad remesh result passes: all quads, exactly the quads the quantization
+    counted (the native figures on the object's 'qgp' property), edge-manifold, the source's Euler
+    characteristic and boundary-edge count kept, the source's transform and parent. Returns the
+    figures."""
+    sizes = {len(p.vertices) for p in quad.data.polygons}
+    assert sizes == {4}, f"not all quads: {sizes}"
+    # The mesh has exactly the quads the quantization counted (its integer cell areas, before any
+    # quad was extracted): none lost or added between the library and Blender.
+    figures = quad["qgp"].to_dict()
+    n = len(quad.data.polygons)
+    assert n == figures["quads_expected"], (source.name, n, figures)
+    assert figures["target_mode"] == "FACES" and figures["target"] == target, figures
+    assert len(figures["quad_paths"]) == figures["components"] >= 1, figures
+    assert figures["layout_components"] == sum(p.startswith("T-mesh layout") for p in figures["quad_paths"])
+    assert figures["seconds"] > 0 and figures["library"] == binding.version(), figures
+    counts = edge_face_counts(quad.data)
+    assert max(counts.values()) <= 2, "an edge of the quads has more than two faces"
+    assert len(counts) == len(quad.data.edges), "loose or duplicate edges"
+    source_boundary = sum(c == 1 for c in edge_face_counts(source.data).values()) > 0
+    assert (sum(c == 1 for c in counts.values()) > 0) == source_boundary, "boundary appeared or vanished"
+    assert euler_characteristic(quad.data) == euler_characteristic(source.data), (
+        euler_characteristic(quad.data), euler_characteristic(source.data))
+    bpy.context.view_layer.update()
+    assert quad.parent == source.parent, (quad.parent, source.parent)
+    assert all(abs(a - b) < 1e-6 for ra, rb in zip(quad.matrix_world, source.matrix_world)
+               for a, b in zip(ra, rb)), (quad.matrix_world, source.matrix_world)
+    return figures
+
+
+def check_sharp_edges_kept(binding, source, quad, marked, angle):
+    """The marked edges are exactly those sharper than `angle`: the library measures how much of
+    their length quad edges cover (within 0.1 % of the diagonal). Returns the coverage."""
+    m = measure_against_source(binding, source, quad, angle)
+    assert m["sharp_edges"] == marked, (m["sharp_edges"], marked)
+    assert m["sharp_edge_coverage"] > 0.95, m["sharp_edge_coverage"]
+    assert m["flipped_quads"] == 0, m["flipped_quads"]
+    return m["sharp_edge_coverage"]
+
+
+def grid_seam_residual(mesh, layer, quads_per_unit):
+    """Largest deviation, over all edges shared by two polygons, of the UV transition from a
+    90-degree rotation plus an integer translation (in grid units): 0 for an integer-grid map."""
+    uv = [(d.uv[0] * quads_per_unit, d.uv[1] * quads_per_unit) for d in layer.data]
+    sides = {}
+    for poly in mesh.polygons:
+        loops = list(poly.loop_indices)
+        for i, li in enumerate(loops):
+            lj = loops[(i + 1) % len(loops)]
+            a, b = mesh.loops[li].vertex_index, mesh.loops[lj].vertex_index
+            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
+
+    def rotate(p, r):
+        return p if r == 0 else rotate((-p[1], p[0]), r - 1)
+
+    worst = 0.0
+    for (a, b), pair in sides.items():
+        if len(pair) != 2:
+            continue
+        p, q = pair
+        d = (p[b][0] - p[a][0], p[b][1] - p[a][1])
+        e = (q[b][0] - q[a][0], q[b][1] - q[a][1])
+        best = math.inf
+        for r in range(4):
+            rd = rotate(d, r)
+            if abs(rd[0] - e[0]) + abs(rd[1] - e[1]) > 1e-3:
+                continue
+            ra = rotate(p[a], r)
+            t = (q[a][0] - ra[0], q[a][1] - ra[1])
+            best = min(best, abs(t[0] - round(t[0])) + abs(t[1] - round(t[1])))
+        worst = max(worst, best)
+    return worst
+
+
+def uv_cut_edges(mesh, layer, tolerance=1e-4):
+    """Vertex pairs of the edges whose two polygons disagree in the UV layer (by more than
+    `tolerance` in a coordinate at one end): the UV islands' inner boundaries, derived here from the
+    loops on their own (not by the add-on's code)."""
+    uv = [d.uv[:] for d in layer.data]
+    loop_vertex = [loop.vertex_index for loop in mesh.loops]
+    sides = {}
+    for poly in mesh.polygons:
+        loops = list(poly.loop_indices)
+        for i, li in enumerate(loops):
+            lj = loops[(i + 1) % len(loops)]
+            a, b = loop_vertex[li], loop_vertex[lj]
+            sides.setdefault((min(a, b), max(a, b)), []).append({a: uv[li], b: uv[lj]})
+    return {key for key, pair in sides.items() for other in pair[1:]
+            if any(abs(other[v][k] - pair[0][v][k]) > tolerance for v in key for k in (0, 1))}
+
+
+def seam_edges(mesh):
+    return {tuple(sorted(e.vertices)) for e in mesh.edges if e.use_seam}
+
+
+def native_cut_edges(operators, obj):
+    """The map's cut edges as the native session of the object's last Integer-Grid UVs run lists
+    them (vertex pairs), restricted to the mesh's edges (a cut may run along a polygon's diagonal).
+    operators: the add-on's operators module (it holds the session cache)."""
+    obj.data.calc_loop_triangles()
+    _, cuts = operators._session_cache[obj.name][1].grid_uv(len(obj.data.loop_triangles))
+    edges = {tuple(sorted(e.vertices)) for e in obj.data.edges}
+    return {(min(a, b), max(a, b)) for a, b in cuts.tolist()} & edges
+
+
+def run_grid_uv(operators, obj, target, per_unit):
+    """Runs Integer-Grid UVs on `obj` with Mark Seams, on the source (Flip-Free Copy off), and
+    checks: the 'QGP Grid' layer with finite UVs, the geometry unchanged, the seams exactly the UV
+    islands' inner boundaries and including every cut the library lists, and an integer-grid map
+    (float32 UVs: the residual is at the level of float precision, not of the grid).
+    operators: the add-on's operators module. Returns (loops, seams, residual)."""
+    select_only(obj)
+    vertices_before = [tuple(v.co) for v in obj.data.vertices]
+    result = bpy.ops.object.qgp_grid_uv(target_faces=target, mark_seams=True, quads_per_unit=per_unit,
+                                        flip_free_copy=False)
+    assert result == {"FINISHED"}, result
+    layer = obj.data.uv_layers.get("QGP Grid")
+    assert layer is not None, [layer.name for layer in obj.data.uv_layers]
+    uv = [tuple(d.uv) for d in layer.data]
+    assert all(math.isfinite(u) and math.isfinite(v) for u, v in uv)
+    assert len({(round(u, 4), round(v, 4)) for u, v in uv}) > 100
+    assert [tuple(v.co) for v in obj.data.vertices] == vertices_before, "geometry changed"
+    seams = seam_edges(obj.data)
+    islands = uv_cut_edges(obj.data, layer, 1e-4 / per_unit)
+    assert seams and seams == islands, (len(seams), len(islands), len(seams - islands), len(islands - seams))
+    cuts = native_cut_edges(operators, obj)
+    assert cuts and cuts <= seams, len(cuts - seams)
+    residual = grid_seam_residual(obj.data, layer, per_unit)
+    assert residual < 1e-3, residual
+    return len(uv), len(seams), residual
+
+
+def run_batch(command, inputs, out, *options, timeout=None):
+    """Runs the batch script (command: the interpreter and script up to its `--`) on `inputs` into
+    `out`; returns (process, report). The report must exist whatever failed. timeout: seconds, after
+    which the batch is ended and the test fails (subprocess.TimeoutExpired)."""
+    proc = subprocess.run(command + inputs + ["--out", out] + list(options), capture_output=True, text=True,
+                          timeout=timeout)
+    path = os.path.join(out, "report.json")
+    assert os.path.exists(path), f"no report (exit {proc.returncode}): {proc.stderr[-2000:]}"
+    with open(path) as f:
+        return proc, json.load(f)
+
+
+def argument(args, name, default):
+    """The value after `name` in a test script's arguments (after Blender's `--`), or default."""
+    return args[args.index(name) + 1] if name in args else default
+
+
+def script_arguments():
+    return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
