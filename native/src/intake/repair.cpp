@@ -492,6 +492,7 @@ void detach_remaining_nonmanifold_faces(TriangleSoup& soup) {
       const int h = ef.sorted[k].second;
       for (int end = 0; end < 2; ++end) {
         int& v = soup.triangles[h / 3][(h % 3 + end) % 3];
+        endpoint.resize(soup.positions.size(), 0);  // v may be a copy made for another of its edges
         endpoint[v] = 1;
         soup.positions.push_back(soup.positions[v]);
         soup.input_vertex.push_back(soup.input_vertex[v]);
