@@ -239,7 +239,8 @@ TEST(Intake, TriangulationAvoidsDiagonalsThatAreEdges) {
   EXPECT_EQ(r.mesh.num_faces(), 4);
 }
 
-TEST(Intake, RefusesNonOrientableMoebiusStrip) {
+// A Möbius strip of 8 quads (16 triangles), width 0.6 around a circle of radius 2.
+PolygonSoup moebius_strip() {
   PolygonSoup s;
   const int n = 8;
   for (int i = 0; i < n; ++i) {
@@ -258,6 +259,11 @@ TEST(Intake, RefusesNonOrientableMoebiusStrip) {
     s.add_face(t0, 3);
     s.add_face(t1, 3);
   }
+  return s;
+}
+
+TEST(Intake, RefusesNonOrientableMoebiusStrip) {
+  PolygonSoup s = moebius_strip();
   std::string msg;
   EXPECT_EQ(intake_error(s, &msg), ErrorCode::InvalidMesh);
   EXPECT_NE(msg.find("non-orientable"), std::string::npos) << msg;
@@ -530,28 +536,6 @@ TEST(IntakeCut, BookWithThreePagesKeepsOnePairAndOneLoosePage) {
   std::sort(faces.begin(), faces.end());
   EXPECT_EQ(faces, (std::vector<int>{2, 4}));
   for (const ComponentInfo& c : r.components) EXPECT_EQ(c.boundary_loops, 1);
-}
-
-PolygonSoup moebius_strip() {
-  PolygonSoup s;
-  const int n = 8;
-  for (int i = 0; i < n; ++i) {
-    const double t = 2 * M_PI * i / n;
-    for (int side : {-1, 1}) {
-      const double w = 0.3 * side;
-      s.positions.push_back(
-          {(2 + w * std::cos(t / 2)) * std::cos(t), (2 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2)});
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    const int a = 2 * i, b = 2 * i + 1;
-    int c = 2 * ((i + 1) % n), d = c + 1;
-    if (i == n - 1) std::swap(c, d);  // the half twist
-    const int t0[3] = {a, c, b}, t1[3] = {b, c, d};
-    s.add_face(t0, 3);
-    s.add_face(t1, 3);
-  }
-  return s;
 }
 
 TEST(IntakeCut, MoebiusSoupIsWeldedThenRefusedOrDropped) {

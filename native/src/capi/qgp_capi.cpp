@@ -365,14 +365,20 @@ int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
   });
 }
 
+// The session's quad mesh; NotReady when the last job produced none.
+static const qgp::QuadMesh& quad_result_of(qgp_session* session) {
+  const qgp::QuadMesh* quads = session->session->quad_result();
+  if (!quads) throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+  return *quads;
+}
+
 int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_quads) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    const qgp::QuadMesh* quads = session->session->quad_result();
-    if (!quads) throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
-    if (num_vertices) *num_vertices = quads->V.rows();
-    if (num_quads) *num_quads = quads->Q.rows();
+    const qgp::QuadMesh& quads = quad_result_of(session);
+    if (num_vertices) *num_vertices = quads.V.rows();
+    if (num_quads) *num_quads = quads.Q.rows();
     return QGP_OK;
   });
 }
@@ -381,8 +387,7 @@ int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    const qgp::QuadMesh* q = session->session->quad_result();
-    if (!q) throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    const qgp::QuadMesh* q = &quad_result_of(session);
     if (vertices) std::memcpy(vertices, q->V.data(), sizeof(double) * 3 * q->V.rows());
     if (quads) std::memcpy(quads, q->Q.data(), sizeof(int32_t) * 4 * q->Q.rows());
     if (source_face) {
@@ -397,8 +402,7 @@ int qgp_result_kept_counts(qgp_session* session, int64_t* num_vertices, int64_t*
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    if (!session->session->quad_result())
-      throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    quad_result_of(session);
     const qgp::TriMesh* kept = session->session->kept_triangles();
     if (num_vertices) *num_vertices = kept ? kept->num_vertices() : 0;
     if (num_triangles) *num_triangles = kept ? kept->num_faces() : 0;
@@ -411,8 +415,7 @@ int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_t* trian
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
     require_idle(session);
-    if (!session->session->quad_result())
-      throw qgp::Error(qgp::ErrorCode::NotReady, "no quad mesh: run a remesh job first");
+    quad_result_of(session);
     const qgp::TriMesh* kept = session->session->kept_triangles();
     if (!kept) return QGP_OK;
     if (vertices) std::memcpy(vertices, kept->V.data(), sizeof(double) * 3 * kept->V.rows());
