@@ -146,6 +146,10 @@ def run_qgp(qgp, path, target, out_dir, timeout):
     if status is None:
         if report.get("status") == "ok" and proc.returncode == 0:
             status = "ok"
+        elif report.get("status") == "partial" and proc.returncode == 5:  # parts kept as triangles
+            status = "partial"
+            failed = report.get("failed_components") or []
+            message = f"{len(failed)} part(s) kept as triangles"
         else:
             status = "refused" if report.get("error") else "error"
             message = (report.get("error") or {}).get("message") or stderr.splitlines()[-1:] or \

@@ -9,11 +9,14 @@
 # Any failure, sanitizer report or fuzzer finding fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+phase() { echo "== $1 (at ${SECONDS} s)"; }  # each phase's start, for what each part of CI costs
 ./scripts/setup.sh
+phase "setup: Blender 4.5 and 5.0 modules"
 ./scripts/setup_bpy.sh  # Blender 4.5 and 5.0 as Python modules (PyPI), for the blender_module_* tests
+phase "build (Release)"
 ./scripts/build.sh -DQGP_BPY_TESTS=ON
 
-echo "== code checks"
+phase "code checks"
 /usr/bin/python3 scripts/check_function_length.py --build build
 # shellcheck disable=SC2046  # one argument per file
 clang-format-14 --dry-run --Werror $(git ls-files 'native/*.cpp' 'native/*.h' 'tests/*.cpp' 'tests/*.h' 'bench/*.cpp' 'bench/*.h')
@@ -32,12 +35,13 @@ run_ctest() {  # build dir, extra ctest arguments...
   ctest --test-dir "$dir" --output-on-failure -j2 --timeout "$TEST_TIMEOUT" -E "$SWEEPS" "$@"
 }
 
-echo "== tests (Release)"
+phase "tests (Release)"
 run_ctest build
 
-echo "== tests (AddressSanitizer + UndefinedBehaviorSanitizer)"
+phase "build (AddressSanitizer + UndefinedBehaviorSanitizer)"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQGP_SANITIZE=ON >/dev/null
 cmake --build build-asan -j"$(nproc)"
+phase "tests (AddressSanitizer + UndefinedBehaviorSanitizer)"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
@@ -45,9 +49,10 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # of its runtime, so that test runs in the Release pass only.
 ctest --test-dir build-asan --output-on-failure -j2 --timeout "$SWEEP_TIMEOUT" -E "$SWEEPS|^cli_abnormal_end$" -L 'native|cli'
 
-echo "== fuzzing (${QGP_FUZZ_SECONDS:-45} s per target)"
+phase "build (libFuzzer targets)"
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQGP_FUZZ=ON >/dev/null
 cmake --build build-fuzz -j"$(nproc)" --target fuzz_read_mesh fuzz_capi_arrays
+phase "fuzzing (${QGP_FUZZ_SECONDS:-45} s per target)"
 for target in read_mesh capi_arrays; do
   work=$(mktemp -d)
   status=0
@@ -62,4 +67,4 @@ for target in read_mesh capi_arrays; do
   fi
 done
 
-echo "== all tests passed"
+phase "all tests passed"

@@ -8,6 +8,7 @@ import math
 import os
 import sys
 import tempfile
+import time
 
 import bpy
 
@@ -604,7 +605,9 @@ def main():
     assert only is None or {t.__name__ for t, _ in tests} >= set(only), only
     for test, args in tests:
         if only is None or test.__name__ in only:
+            start = time.monotonic()
             test(*args)
+            print(f"-- {test.__name__}: {time.monotonic() - start:.1f} s")
     print("add-on test: OK" if only is None else f"add-on test: OK ({len(only)} of {len(tests)} tests)")
 
 

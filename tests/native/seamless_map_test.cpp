@@ -7,6 +7,7 @@
 #include <map>
 #include <queue>
 #include <random>
+#include <set>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -538,10 +539,16 @@ const std::map<std::string, KnownIrregular> kKnownIrregular = {
     {"dragon-genus1.obj", {3, 2.0 / 3.0, 0.005, 0}},
 };
 
+// Left out of the sweep: nefertiti's full-resolution map (99 938 faces, the grid-UV job's path)
+// takes 24 repair rounds and 445 s (2026-11-27), two thirds of the sweep; the remesh job solves it on
+// its working mesh, which the LayoutMeshes sweep checks. QGP_TEST_MESHES=nefertiti.obj runs it.
+const std::set<std::string> kLeftOut = {"nefertiti.obj"};
+
 TEST(SeamlessMapMeshes, EveryManifoldMeshIsSeamlessAndRegular) {
   std::cout << "[seamless] mesh | faces | singularities | flipped before -> after | degenerate | ipopt "
                "rounds/iterations | field s | seamless s\n";
   for (const std::string& name : test::manifold_mesh_files()) {
+    if (kLeftOut.count(name) && !std::getenv("QGP_TEST_MESHES")) continue;
     SCOPED_TRACE(name);
     const Prepared p = prepare(name, -1, 2000);
     SeamlessMapOptions o;

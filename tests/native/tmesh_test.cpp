@@ -697,9 +697,10 @@ TEST(TMesh, ObliqueQuadMapsOfClosedMeshes) {
   quad_map_case("kitten.obj", -1, {21, 20, 29});
 }
 
-// The pipeline's own T-meshes: the exact seamless map of every manifold mesh of the shared set
-// (on its working mesh where the session decimates), without and with features at 40 degrees on
-// the CAD meshes; every check of expect_valid, and a row of figures per mesh.
+// The pipeline's own T-meshes: the exact seamless map of the quick meshes of the shared set (on
+// the working mesh where the session decimates), without and with features at 40 degrees on the
+// CAD meshes; every check of expect_valid, and a row of figures per mesh. The large meshes' T-meshes
+// are checked by the LayoutMeshes sweep (its stage invariants at four densities).
 void session_tmesh_cases(const std::string& name, double sharp_angle_deg) {
   Session session(read_mesh_file(test::mesh_path(name)));
   RemeshOptions options;
@@ -723,8 +724,8 @@ void session_tmesh_cases(const std::string& name, double sharp_angle_deg) {
   }
 }
 
-TEST(TMesh, SessionMapsOfEveryManifoldMesh) {
-  for (const std::string& name : test::manifold_mesh_files()) {
+TEST(TMesh, SessionMapsOfTheQuickMeshes) {
+  for (const std::string& name : test::quick_mesh_files()) {
     if (!kAllMeshes && name != "spot.obj" && name != "joint.obj") continue;
     session_tmesh_cases(name, -1);
   }

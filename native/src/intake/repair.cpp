@@ -327,13 +327,18 @@ void unite_close_points(const std::vector<Vec3>& positions, const std::vector<in
   using Cell = std::array<int64_t, 3>;
   struct CellHash {
     size_t operator()(const Cell& c) const {
-      return static_cast<size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+      // Unsigned arithmetic: a cell index far from the origin wraps instead of overflowing.
+      return static_cast<size_t>(static_cast<uint64_t>(c[0]) * 73856093u ^ static_cast<uint64_t>(c[1]) * 19349663u ^
+                                 static_cast<uint64_t>(c[2]) * 83492791u);
     }
   };
   const double cell_size = eps > 0 ? eps : 1;
   auto cell_of = [&](const Vec3& p) {
     Cell c;
-    for (int d = 0; d < 3; ++d) c[d] = static_cast<int64_t>(std::clamp(std::floor(p[d] / cell_size), -1e15, 1e15));
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(p[d] / cell_size);
+      c[d] = std::isnan(index) ? 0 : static_cast<int64_t>(std::clamp(index, -1e15, 1e15));
+    }
     return c;
   };
   std::unordered_map<Cell, std::vector<int>, CellHash> grid;
