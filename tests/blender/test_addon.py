@@ -13,10 +13,12 @@ import time
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
 from addon_checks import (check_quad_object, check_sharp_edges_kept, grid_seam_residual,  # noqa: E402
                           mark_sharp_edges, reset_scene, run_batch, run_grid_uv, run_quad_remesh, scene_state,
                           seam_edges, select_only, uv_cut_edges)
 import addon_checks  # noqa: E402
+from shapes import moebius_strip  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ARGS = addon_checks.script_arguments()
@@ -68,24 +70,6 @@ def test_registration():
     print("registration: OK")
 
 
-def moebius_strip(n=8, width=0.3):
-    """Vertices and triangles of a Moebius strip: non-orientable, the kind of part intake still refuses."""
-    vertices, faces = [], []
-    for i in range(n):
-        t = 2 * math.pi * i / n
-        for side in (-1, 1):
-            w = width * side
-            r = 2 + w * math.cos(t / 2)
-            vertices.append((r * math.cos(t), r * math.sin(t), w * math.sin(t / 2)))
-    for i in range(n):
-        a, b = 2 * i, 2 * i + 1
-        c, d = 2 * ((i + 1) % n), 2 * ((i + 1) % n) + 1
-        if i == n - 1:
-            c, d = d, c  # the half twist
-        faces += [(a, c, b), (b, c, d)]
-    return vertices, faces
-
-
 def write_obj(path, vertices, faces):
     with open(path, "w") as f:
         for v in vertices:
@@ -95,7 +79,7 @@ def write_obj(path, vertices, faces):
 
 
 def test_broken_inputs(binding):
-    # A Moebius strip cannot be oriented: both operators refuse it, nothing changes.
+    # A Moebius strip alone cannot be oriented: both operators refuse it, nothing changes.
     reset_scene()
     vertices, faces = moebius_strip()
     mesh = bpy.data.meshes.new("moebius")
@@ -109,6 +93,30 @@ def test_broken_inputs(binding):
         assert "non-orientable" in message, message
     assert "QGP Grid" not in obj.data.uv_layers
     print(f"moebius strip: refused without changes: {message[:70]}")
+    # Beside a torus, the strip is kept as its 16 input triangles (selected) and the torus quadded.
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
+    obj = bpy.context.active_object
+    strip_vertices, strip_faces = moebius_strip(centre=(6.0, 0.0, 0.0))
+    strip = bpy.data.objects.new("strip", bpy.data.meshes.new("strip"))
+    strip.data.from_pydata(strip_vertices, [], strip_faces)
+    bpy.context.scene.collection.objects.link(strip)
+    strip.select_set(True)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    assert bpy.ops.object.join() == {"FINISHED"}
+    assert len(obj.data.polygons) == 64 * 24 + 16, len(obj.data.polygons)
+    before = mesh_data_state(obj)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert bpy.ops.object.qgp_quad_remesh(target_faces=600, keep_source_visible=True) == {"FINISHED"}
+    warning = next(line for line in out.getvalue().splitlines() if line.startswith("Warning:"))
+    assert "complete except 1 part(s)" in warning and "non-orientable" in warning, warning
+    assert mesh_data_state(obj) == before, "the source changed"
+    quad = bpy.data.objects[obj.name + "_quads"]
+    kept = [p for p in quad.data.polygons if len(p.vertices) == 3]
+    assert len(kept) == 16 and all(p.select == (len(p.vertices) == 3) for p in quad.data.polygons), len(kept)
+    print(f"moebius strip beside a torus: kept as 16 triangles, torus quadded: {warning[:100]}")
     # Truck: its 54 non-manifold edges are cut into sheets (no refusal at intake); the parts whose
     # holes are narrower than a quad at this density are kept as their triangles, named in a
     # warning; the source is unchanged.

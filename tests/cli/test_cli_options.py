@@ -19,6 +19,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
+from shapes import moebius_strip  # noqa: E402
+
 FAILURES = []
 
 
@@ -262,6 +265,34 @@ def test_partial(qgp, meshes, tmp):
           "report: a failed part has no extraction entry (null)")
 
 
+def test_non_orientable_part(qgp, meshes, tmp):
+    """A Moebius strip beside spot: spot is quadded, the strip written as its input triangles (exit 5)."""
+    vertices, faces, _ = read_obj(os.path.join(meshes, "spot.obj"))
+    strip_vertices, strip_faces = moebius_strip(centre=(10.0, 0.0, 0.0))
+    path, out = os.path.join(tmp, "spot_and_strip.obj"), os.path.join(tmp, "spot_and_strip_quads.obj")
+    with open(path, "w") as f:
+        for v in vertices + strip_vertices:
+            f.write("v %r %r %r\n" % tuple(v))
+        for face in faces + [[len(vertices) + i for i in t] for t in strip_faces]:
+            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
+    report = os.path.join(tmp, "strip.json")
+    proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, "--report", report)
+    r = json.load(open(report))
+    failed = r.get("failed_components", [])
+    check(proc.returncode == 5 and r["status"] == "partial" and len(failed) == 1
+          and failed[0]["stage"] == "intake" and failed[0]["component"] == 1 and failed[0]["triangles"] == 16
+          and "non-orientable" in failed[0]["message"], f"a non-orientable part beside spot: exit 5, {failed}")
+    check("component 1 (16 triangles) kept as triangles: intake: non-orientable" in proc.stderr,
+          "stderr names the strip and why")
+    out_vertices, out_faces, _ = read_obj(out)
+    objects = [line.split()[1] for line in open(out) if line.startswith("o ")]
+    kept = [[out_vertices[i] for i in face] for face in out_faces if len(face) == 3]
+    expected = [[strip_vertices[i] for i in t] for t in strip_faces]
+    close = all(abs(a - b) < 1e-9 for k, e in zip(kept, expected) for p, q in zip(k, e) for a, b in zip(p, q))
+    check(objects[-1] == "component_1_triangles" and len(kept) == 16 and close,
+          "-o: the strip's 16 input triangles, corner by corner, as the last object")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--qgp", required=True)
@@ -269,7 +300,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
-                     test_features, test_drop_bad_components, test_weld, test_partial):
+                     test_features, test_drop_bad_components, test_weld, test_partial, test_non_orientable_part):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)

@@ -12,6 +12,7 @@
 
 #include "core/json.h"
 #include "qgp/qgp.h"
+#include "test_support.h"
 
 namespace {
 
@@ -280,6 +281,56 @@ TEST(CApi, RemeshJobGivesTheQuadsItReports) {
   ASSERT_EQ(qgp_result_kept_counts(s, &kept_nv, &kept_nt), QGP_OK);
   EXPECT_EQ(kept_nv, 0);
   EXPECT_EQ(kept_nt, 0);
+  qgp_session_free(s);
+}
+
+// A 6 x 6 grid and, far away, a Möbius strip (16 triangles): the grid is quadded, the strip kept as
+// its input triangles, named in the report as component 1, left without grid UVs.
+TEST(CApi, NonOrientablePartIsKeptAsItsTriangles) {
+  Grid g = make_grid(6);
+  const qgp::PolygonSoup strip = qgp::test::moebius_strip(qgp::Vec3(20, 0, 0));
+  const int32_t base = static_cast<int32_t>(g.vertices.size() / 3);
+  for (const qgp::Vec3& p : strip.positions) g.vertices.insert(g.vertices.end(), {p.x(), p.y(), p.z()});
+  for (int v : strip.face_vertices) g.triangles.push_back(base + v);
+  qgp_session* s = create(g);
+  ASSERT_EQ(qgp_session_set_option(s, "target_faces", 100), QGP_OK);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  int state = -1;
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  const auto report = qgp::Json::parse(report_of(s));
+  EXPECT_EQ(report["status"], "partial");
+  ASSERT_EQ(report["failed_components"].size(), 1u);
+  const qgp::Json& failed = report["failed_components"][0];
+  EXPECT_EQ(failed["component"], 1);
+  EXPECT_EQ(failed["triangles"], 16);
+  EXPECT_EQ(failed["stage"], "intake");
+  EXPECT_NE(failed["message"].get<std::string>().find("non-orientable"), std::string::npos);
+  int64_t nv = 0, nq = 0, kept_nv = 0, kept_nt = 0;
+  ASSERT_EQ(qgp_result_quad_counts(s, &nv, &nq), QGP_OK);
+  EXPECT_GT(nq, 0);
+  ASSERT_EQ(qgp_result_kept_counts(s, &kept_nv, &kept_nt), QGP_OK);
+  ASSERT_EQ(kept_nt, 16);
+  ASSERT_EQ(kept_nv, 16);
+  std::vector<double> vertices(3 * kept_nv);
+  std::vector<int32_t> triangles(3 * kept_nt), source(kept_nt), component(kept_nt);
+  ASSERT_EQ(qgp_result_kept_fetch(s, vertices.data(), triangles.data(), source.data(), component.data()), QGP_OK);
+  for (int t = 0; t < 16; ++t) {
+    EXPECT_EQ(source[t], 72 + t);  // after the grid's 72 triangles, in order
+    EXPECT_EQ(component[t], 1);
+    for (int j = 0; j < 3; ++j)  // the input corner, in the input orientation
+      for (int d = 0; d < 3; ++d)
+        EXPECT_EQ(vertices[3 * triangles[3 * t + j] + d], g.vertices[3 * g.triangles[3 * (72 + t) + j] + d]);
+  }
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_GRID_UV), QGP_OK);
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  EXPECT_EQ(qgp::Json::parse(report_of(s))["status"], "partial");
+  int64_t cuts = 0;
+  ASSERT_EQ(qgp_result_uv_counts(s, &cuts), QGP_OK);
+  std::vector<double> uv(6 * (72 + 16));
+  std::vector<int32_t> cut_pairs(2 * cuts);
+  ASSERT_EQ(qgp_result_uv_fetch(s, uv.data(), cut_pairs.data()), QGP_OK);
+  for (int i = 0; i < 6 * 72; ++i) EXPECT_FALSE(std::isnan(uv[i])) << i;
+  for (int i = 6 * 72; i < 6 * 88; ++i) EXPECT_TRUE(std::isnan(uv[i])) << i;
   qgp_session_free(s);
 }
 

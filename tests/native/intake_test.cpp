@@ -239,31 +239,8 @@ TEST(Intake, TriangulationAvoidsDiagonalsThatAreEdges) {
   EXPECT_EQ(r.mesh.num_faces(), 4);
 }
 
-// A Möbius strip of 8 quads (16 triangles), width 0.6 around a circle of radius 2.
-PolygonSoup moebius_strip() {
-  PolygonSoup s;
-  const int n = 8;
-  for (int i = 0; i < n; ++i) {
-    const double t = 2 * M_PI * i / n;
-    for (int side : {-1, 1}) {
-      const double w = 0.3 * side;
-      s.positions.push_back(
-          {(2 + w * std::cos(t / 2)) * std::cos(t), (2 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2)});
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    const int a = 2 * i, b = 2 * i + 1;
-    int c = 2 * ((i + 1) % n), d = c + 1;
-    if (i == n - 1) std::swap(c, d);  // the half twist
-    const int t0[3] = {a, c, b}, t1[3] = {b, c, d};
-    s.add_face(t0, 3);
-    s.add_face(t1, 3);
-  }
-  return s;
-}
-
 TEST(Intake, RefusesNonOrientableMoebiusStrip) {
-  PolygonSoup s = moebius_strip();
+  PolygonSoup s = test::moebius_strip();
   std::string msg;
   EXPECT_EQ(intake_error(s, &msg), ErrorCode::InvalidMesh);
   EXPECT_NE(msg.find("non-orientable"), std::string::npos) << msg;
@@ -539,7 +516,7 @@ TEST(IntakeCut, BookWithThreePagesKeepsOnePairAndOneLoosePage) {
 }
 
 TEST(IntakeCut, MoebiusSoupIsWeldedThenRefusedOrDropped) {
-  PolygonSoup strip = moebius_strip();
+  PolygonSoup strip = test::moebius_strip();
   TriMesh m;
   m.V.resize(strip.num_vertices(), 3);
   for (int v = 0; v < strip.num_vertices(); ++v) m.V.row(v) = strip.positions[v].transpose();
@@ -561,6 +538,52 @@ TEST(IntakeCut, MoebiusSoupIsWeldedThenRefusedOrDropped) {
   EXPECT_GT(repair_count(r, "welded_vertices"), 0);
   EXPECT_EQ(r.mesh.num_faces(), 1);
   EXPECT_FALSE(find_repair(r, "dropped_nonorientable_components")->input_vertices.empty());
+  EXPECT_TRUE(r.non_orientable_parts.empty());
+  // By default the welded strip is set aside as its triangles, the far triangle goes on.
+  const IntakeResult kept = intake_with(soup, IntakeOptions{});
+  EXPECT_EQ(kept.mesh.num_faces(), 1);
+  ASSERT_EQ(kept.non_orientable_parts.size(), 1u);
+  EXPECT_EQ(kept.non_orientable_parts[0].triangles.size(), 16u);
+  EXPECT_EQ(kept.non_orientable_parts[0].positions.size(), 16u);  // welded: the strip's 16 corners
+}
+
+// A non-orientable part beside orientable ones is set aside with its input triangles, faces and
+// positions unchanged; the report names the repair and where, and warns.
+TEST(IntakeCut, NonOrientablePartBesideOthersIsSetAside) {
+  PolygonSoup soup = test::moebius_strip(Vec3(10, 0, 0));
+  const PolygonSoup second = test::moebius_strip(Vec3(-10, 0, 0));
+  const int base = soup.num_vertices();
+  for (const Vec3& p : second.positions) soup.positions.push_back(p);
+  for (int f = 0; f < second.num_faces(); ++f) {
+    const int t[3] = {base + second.face_vertices[3 * f], base + second.face_vertices[3 * f + 1],
+                      base + second.face_vertices[3 * f + 2]};
+    soup.add_face(t, 3);
+  }
+  const int v0 = soup.num_vertices();  // and an orientable tetrahedron
+  for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}) soup.positions.push_back(p);
+  for (const std::array<int, 3>& t : {std::array<int, 3>{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}}) {
+    const int f[3] = {v0 + t[0], v0 + t[1], v0 + t[2]};
+    soup.add_face(f, 3);
+  }
+  const IntakeResult r = intake_with(soup, IntakeOptions{});
+  ASSERT_EQ(r.components.size(), 1u);
+  EXPECT_EQ(r.mesh.num_faces(), 4);
+  EXPECT_EQ(r.components[0].genus, 0);
+  ASSERT_EQ(r.non_orientable_parts.size(), 2u);
+  EXPECT_EQ(repair_count(r, "kept_nonorientable_components"), 2);
+  EXPECT_EQ(find_repair(r, "kept_nonorientable_components")->input_vertices.size(), 2u);
+  ASSERT_FALSE(r.warnings.empty());
+  EXPECT_NE(r.warnings.back().find("non-orientable"), std::string::npos) << r.warnings.back();
+  for (size_t k = 0; k < 2; ++k) {
+    const NonOrientablePart& part = r.non_orientable_parts[k];
+    ASSERT_EQ(part.triangles.size(), 16u);
+    for (size_t t = 0; t < part.triangles.size(); ++t) {
+      const int f = part.input_face[t];
+      ASSERT_TRUE(f >= 16 * static_cast<int>(k) && f < 16 * static_cast<int>(k + 1)) << f;
+      for (int j = 0; j < 3; ++j)  // the input triangle, corner by corner, in its input orientation
+        EXPECT_EQ(part.positions[part.triangles[t][j]], soup.positions[soup.face_vertices[3 * f + j]]);
+    }
+  }
 }
 
 TEST(IntakeReport, RepairsNameWhereTheyHappened) {

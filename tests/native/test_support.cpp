@@ -60,6 +60,28 @@ IntakeResult load_mesh(const std::string& name) {
   return run_intake(read_mesh_file(mesh_path(name)), IntakeOptions{}, progress);
 }
 
+PolygonSoup moebius_strip(const Vec3& centre) {
+  PolygonSoup s;
+  const int n = 8;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    for (int side : {-1, 1}) {
+      const double w = 0.3 * side;
+      s.positions.push_back(centre + Vec3((2 + w * std::cos(t / 2)) * std::cos(t),
+                                          (2 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2)));
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i, b = 2 * i + 1;
+    int c = 2 * ((i + 1) % n), d = c + 1;
+    if (i == n - 1) std::swap(c, d);  // the half twist
+    const int t0[3] = {a, c, b}, t1[3] = {b, c, d};
+    s.add_face(t0, 3);
+    s.add_face(t1, 3);
+  }
+  return s;
+}
+
 TriMesh component_mesh(const IntakeResult& intake, int component) { return extract_component(intake, component); }
 
 void infer_rotations(const TriMesh& mesh, Parametrization& param) {

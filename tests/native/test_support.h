@@ -28,6 +28,10 @@ std::vector<std::string> quick_mesh_files();
 // Reads and repairs a shared mesh (throws on failure).
 IntakeResult load_mesh(const std::string& name);
 
+// A Möbius strip of 8 quads (16 triangles), width 0.6 around a circle of radius 2 centred at
+// `centre`: non-orientable.
+PolygonSoup moebius_strip(const Vec3& centre = Vec3::Zero());
+
 // A single connected component of an intake result as its own mesh.
 TriMesh component_mesh(const IntakeResult& intake, int component);
 

@@ -118,7 +118,9 @@ QGP_API int qgp_result_quad_counts(qgp_session* session, int64_t* num_vertices, 
 QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_t* quads, int32_t* source_face);
 
 /* The components of a many-part mesh that the last remesh job could not quad (the report's
- * "status" is "partial" and "failed_components" says why), kept as their repaired triangles:
+ * "status" is "partial" and "failed_components" says why), kept as their repaired triangles, and
+ * non-orientable parts, kept as their input triangles in their input orientation (numbered after
+ * the components of qgp_intake_counts):
  * counts (0 and 0 when every component was quadded), then vertices (nv x 3), triangles (nt x 3),
  * per triangle its input face and its component (nt each). QGP_ERR_NOT_READY as for the quads. */
 QGP_API int qgp_result_kept_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles);
@@ -127,7 +129,8 @@ QGP_API int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_
 
 /* The integer-grid map of the last successful grid-UV or remesh job, per corner of the input
  * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; a triangle intake removed gets the map of
- * its nearest kept one at its corners; NaN only on parts remeshed on a decimated working mesh);
+ * its nearest kept one at its corners; NaN on parts remeshed on a decimated working mesh and on
+ * parts kept as triangles, see failed_components in the report);
  * cuts: the seam edges as input vertex pairs (num_cut_edges x 2). */
 QGP_API int qgp_result_uv_counts(qgp_session* session, int64_t* num_cut_edges);
 QGP_API int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts);

@@ -103,14 +103,59 @@ void weld(TriangleSoup& soup, const IntakeOptions& options, IntakeResult& result
   run_repair(result, "collapsed_faces", [&](RepairLocations* w) { return remove_collapsed_triangles(soup, w); });
 }
 
+// Moves the given edge-connected components out of the soup into result.non_orientable_parts;
+// refuses the mesh when nothing else is left (a lone Möbius strip has no quads to give).
+void set_aside_non_orientable(TriangleSoup& soup, const std::vector<int>& parts, const std::string& what,
+                              IntakeResult& result) {
+  int num_components = 0;
+  const std::vector<int> component = edge_connected_components(soup, &num_components);
+  std::vector<int> part_of(num_components, -1);
+  for (size_t k = 0; k < parts.size(); ++k) part_of[parts[k]] = static_cast<int>(k);
+  std::vector<NonOrientablePart> set_aside(parts.size());
+  std::vector<std::vector<int>> new_index(parts.size());  // per part: soup vertex -> part vertex
+  std::vector<char> keep(soup.triangles.size(), 1);
+  RepairLocations where;
+  for (size_t t = 0; t < soup.triangles.size(); ++t) {
+    const int k = part_of[component[t]];
+    if (k < 0) continue;
+    keep[t] = 0;
+    NonOrientablePart& part = set_aside[k];
+    if (part.triangles.empty()) where.add(soup.input_vertex[soup.triangles[t][0]]);
+    std::vector<int>& index = new_index[k];
+    if (index.empty()) index.assign(soup.positions.size(), -1);
+    std::array<int, 3> triangle;
+    for (int j = 0; j < 3; ++j) {
+      int& v = index[soup.triangles[t][j]];
+      if (v < 0) {
+        v = static_cast<int>(part.positions.size());
+        part.positions.push_back(soup.positions[soup.triangles[t][j]]);
+      }
+      triangle[j] = v;
+    }
+    part.triangles.push_back(triangle);
+    part.input_face.push_back(soup.input_face[t]);
+  }
+  if (std::find(keep.begin(), keep.end(), 1) == keep.end())
+    throw Error(ErrorCode::InvalidMesh, what +
+                                            " and nothing else; the mesh is refused (a surface without two sides "
+                                            "has no quad mesh; repair it)");
+  keep_triangles(soup, keep);
+  result.non_orientable_parts = std::move(set_aside);
+  result.repairs.push_back({"kept_nonorientable_components", static_cast<int>(parts.size()), where.input_vertices});
+  result.warnings.push_back(what + "; kept as their triangles (a surface without two sides has no quad mesh)");
+}
+
 // Orientation, non-orientable parts, non-manifold vertices and zero-area faces.
 void repair_orientation_and_shape(TriangleSoup& soup, const IntakeOptions& options, IntakeResult& result) {
   std::vector<int> non_orientable;
   run_repair(result, "inconsistent_orientation",
              [&](RepairLocations* w) { return orient_consistently(soup, &non_orientable, w); });
   if (!non_orientable.empty()) {
-    drop_or_refuse(soup, non_orientable, std::to_string(non_orientable.size()) + " non-orientable component(s)",
-                   options.drop_bad_components, result, "dropped_nonorientable_components");
+    const std::string what = std::to_string(non_orientable.size()) + " non-orientable component(s)";
+    if (options.drop_bad_components)
+      drop_or_refuse(soup, non_orientable, what, true, result, "dropped_nonorientable_components");
+    else
+      set_aside_non_orientable(soup, non_orientable, what, result);
   }
   run_repair(result, "nonmanifold_vertices", [&](RepairLocations* w) { return split_nonmanifold_vertices(soup, w); });
   int unrepaired = 0;

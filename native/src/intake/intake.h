@@ -19,9 +19,10 @@ struct IntakeOptions {
   // Non-manifold edges (more than two faces) are cut into sheets; true refuses the mesh instead
   // (Error InvalidMesh naming the first such edge).
   bool refuse_non_manifold = false;
-  // Parts that cannot be repaired (non-orientable, or non-manifold when refuse_non_manifold):
-  // false refuses the mesh (Error InvalidMesh), true drops the affected connected components,
-  // keeps the rest and says so in the report.
+  // Parts that cannot be repaired: true drops them (non-orientable parts, and non-manifold ones
+  // when refuse_non_manifold), keeps the rest and says so in the report. false refuses the mesh
+  // (Error InvalidMesh) for non-manifold parts, and sets non-orientable parts aside as their
+  // triangles (IntakeResult::non_orientable_parts) unless nothing else is left.
   bool drop_bad_components = false;
   // A face is zero-area when area <= zero_area * diag^2 (diag: bounding-box diagonal)
   // or 2*area <= flatness * (longest edge)^2: needles and caps this thin have a normal that is
@@ -45,13 +46,22 @@ struct ComponentInfo {
   bool closed() const { return boundary_loops == 0; }
 };
 
+// A part that cannot be given one consistent side (a Möbius strip, a Klein bottle): it cannot be
+// quadded, so it is kept apart as its input triangles, in their input orientation.
+struct NonOrientablePart {
+  std::vector<Vec3> positions;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<int> input_face;  // per triangle: the input face it came from
+};
+
 struct IntakeResult {
   TriMesh mesh;                   // repaired, oriented, manifold; connectivity built
   std::vector<int> input_vertex;  // per mesh vertex: its index in the input soup
   std::vector<int> input_face;    // per mesh face: the input face (polygon) it came from
   std::vector<int> weld_target;   // per input vertex: the input vertex it was welded into (or itself)
   std::vector<ComponentInfo> components;
-  std::vector<Repair> repairs;  // only repairs that happened (count > 0)
+  std::vector<NonOrientablePart> non_orientable_parts;  // not in mesh (nor in components)
+  std::vector<Repair> repairs;                          // only repairs that happened (count > 0)
   std::vector<std::string> warnings;
   int input_vertices = 0, input_faces = 0;
 };

@@ -49,6 +49,7 @@ void Session::run(Job job, Progress& progress) {
   quad_source_face_.clear();
   kept_triangles_.reset();
   kept_source_face_.clear();
+  kept_component_.clear();
   corner_uv_.clear();
   cut_edges_.clear();
   report_["status"] = "ok";
@@ -255,6 +256,13 @@ void Session::report_failed_components() {
                       {"code", error_code_name(failure->code)},
                       {"message", failure->message}});
   }
+  // Non-orientable parts, set aside at intake, follow the intake's components in numbering.
+  for (size_t k = 0; k < intake_->non_orientable_parts.size(); ++k)
+    failed.push_back({{"component", components_.size() + k},
+                      {"triangles", intake_->non_orientable_parts[k].triangles.size()},
+                      {"stage", "intake"},
+                      {"code", error_code_name(ErrorCode::InvalidMesh)},
+                      {"message", "non-orientable (a surface without two sides has no quad mesh)"}});
   if (failed.empty()) return;
   report_["status"] = "partial";
   report_["failed_components"] = std::move(failed);
@@ -272,6 +280,8 @@ void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& ma
   for (size_t c = 0; c < components_.size(); ++c)
     if (components_[c].failure)
       for (int f : intake_->components[c].faces) failed[intake_->input_face[f]] = 1;
+  for (const NonOrientablePart& part : intake_->non_orientable_parts)
+    for (int f : part.input_face) failed[f] = 1;
   for (int f = 0; f < input_.num_faces(); ++f) {
     if (input_.face_size(f) != 3) continue;
     bool missing = false;
@@ -400,11 +410,28 @@ void Session::collect_kept_triangles(const std::vector<int>& failed) {
   kept_triangles_.reset();
   kept_source_face_.clear();
   kept_component_.clear();
-  if (failed.empty()) return;
+  if (failed.empty() && intake_->non_orientable_parts.empty()) return;
   std::vector<int> face_map;
-  kept_triangles_ = std::make_unique<TriMesh>(extract_components(*intake_, failed, nullptr, &face_map));
+  const TriMesh failed_parts = extract_components(*intake_, failed, nullptr, &face_map);
+  kept_triangles_ = std::make_unique<TriMesh>();  // V and F only: a non-orientable part has no halfedges
+  kept_triangles_->V = failed_parts.V;
+  kept_triangles_->F = failed_parts.F;
   for (int f : face_map) kept_source_face_.push_back(intake_->input_face[f]);
   for (int c : failed) kept_component_.insert(kept_component_.end(), intake_->components[c].faces.size(), c);
+  for (size_t k = 0; k < intake_->non_orientable_parts.size(); ++k)
+    append_non_orientable_part(intake_->non_orientable_parts[k], static_cast<int>(components_.size() + k));
+}
+
+void Session::append_non_orientable_part(const NonOrientablePart& part, int component) {
+  TriMesh& kept = *kept_triangles_;
+  const int base = kept.num_vertices(), first = kept.num_faces();
+  kept.V.conservativeResize(base + static_cast<int>(part.positions.size()), 3);
+  for (size_t v = 0; v < part.positions.size(); ++v) kept.V.row(base + v) = part.positions[v].transpose();
+  kept.F.conservativeResize(first + static_cast<int>(part.triangles.size()), 3);
+  for (size_t t = 0; t < part.triangles.size(); ++t)
+    for (int j = 0; j < 3; ++j) kept.F(first + t, j) = base + part.triangles[t][j];
+  kept_source_face_.insert(kept_source_face_.end(), part.input_face.begin(), part.input_face.end());
+  kept_component_.insert(kept_component_.end(), part.triangles.size(), component);
 }
 
 }  // namespace qgp

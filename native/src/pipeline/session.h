@@ -44,7 +44,9 @@ class Session {
   const QuadMesh* quad_result() const { return quads_ ? quads_.get() : nullptr; }
   const std::vector<int>& quad_source_face() const { return quad_source_face_; }
   // Components that could not be quadded (report: failed_components), kept as their repaired
-  // triangles (null when every component was quadded); per triangle its input face and component.
+  // triangles, and the non-orientable parts intake set aside (numbered after the components); null
+  // when every part was quadded. V and F only (no connectivity); per triangle its input face and
+  // component.
   const TriMesh* kept_triangles() const { return kept_triangles_.get(); }
   const std::vector<int>& kept_source_face() const { return kept_source_face_; }
   const std::vector<int>& kept_component() const { return kept_component_; }
@@ -69,7 +71,9 @@ class Session {
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
   void collect_quads(Progress& progress);
+  // The failed components' triangles and the parts intake set aside (non-orientable).
   void collect_kept_triangles(const std::vector<int>& failed);
+  void append_non_orientable_part(const NonOrientablePart& part, int component);
   // The quad figures (report "quad") of quads_, the quads of components `quadded`.
   Json measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const;
   void report_failed_components();
