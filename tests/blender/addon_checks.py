@@ -3,6 +3,7 @@ Python module (module/test_extension_module.py, PyPI's bpy 4.5 and 5.0). Scene s
 of an operator's result, and the batch runner. Needs bpy; imports nothing of the add-on itself (the
 add-on's package name differs: `quantized_retopo` as a legacy add-on, `bl_ext.<repo>.quantized_retopo`
 as an extension)."""
+import glob
 import json
 import math
 import os
@@ -10,6 +11,33 @@ import subprocess
 import sys
 
 import bpy
+
+
+def install_legacy_addon(repo, module, enable=True):
+    """Installs the legacy zip built into repo/dist (Blender 3.4) into the temporary user scripts
+    directory named by BLENDER_USER_SCRIPTS and (with enable) enables it; returns its module."""
+    zips = sorted(glob.glob(os.path.join(repo, "dist", module + "-*-legacy.zip")))
+    assert zips, "build the zips first (scripts/build_extension.py)"
+    user_scripts = os.environ.get("BLENDER_USER_SCRIPTS")
+    assert user_scripts and bpy.utils.user_resource("SCRIPTS").startswith(user_scripts), \
+        "the add-on must be installed into a temporary user scripts directory"
+    bpy.ops.preferences.addon_install(filepath=zips[-1], overwrite=True)
+    installed = os.path.join(bpy.utils.user_resource("SCRIPTS"), "addons", module)
+    assert os.path.exists(os.path.join(installed, "__init__.py")), "add-on not installed"
+    if not enable:
+        return None
+    bpy.ops.preferences.addon_enable(module=module)
+    assert module in bpy.context.preferences.addons, "add-on not enabled"
+    assert os.path.exists(os.path.join(installed, "lib", "libqgp.so")), "native library not installed"
+    return sys.modules[module]
+
+
+def mesh_data_state(obj):
+    """Everything of an object's mesh data an operator could change."""
+    m = obj.data
+    return (m.name, len(m.vertices), len(m.edges), len(m.polygons), [tuple(v.co) for v in m.vertices],
+            [tuple(p.vertices) for p in m.polygons], [e.use_seam for e in m.edges],
+            [layer.name for layer in m.uv_layers], [p.select for p in m.polygons], [len(obj.modifiers)])
 
 
 def reset_scene():
@@ -28,7 +56,8 @@ def scene_state():
         if obj.type == "MESH":
             m = obj.data
             entry += [len(m.vertices), len(m.polygons), [layer.name for layer in m.uv_layers],
-                      hash(tuple(v.co[:] for v in m.vertices)), sum(e.use_seam for e in m.edges)]
+                      hash(repr([v.co[:] for v in m.vertices])),  # repr: a NaN coordinate equals itself
+                      sum(e.use_seam for e in m.edges)]
         state.append(entry)
     return state, len(bpy.data.meshes)
 

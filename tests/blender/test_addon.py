@@ -2,7 +2,6 @@
 installed from the built legacy zip into a temporary user scripts directory (BLENDER_USER_SCRIPTS),
 enabled, then exercised through its operators, panel, menu and batch runner."""
 import contextlib
-import glob
 import io
 import math
 import os
@@ -30,20 +29,6 @@ BATCH = [bpy.app.binary_path, "-b", "--factory-startup", "--python", os.path.joi
 
 def import_mesh(binding, name):
     return addon_checks.import_mesh(binding, os.path.join(MESHES, name))
-
-
-def install_addon():
-    zips = sorted(glob.glob(os.path.join(REPO, "dist", MODULE + "-*-legacy.zip")))
-    assert zips, "build the zips first (scripts/build_extension.py)"
-    user_scripts = os.environ.get("BLENDER_USER_SCRIPTS")
-    assert user_scripts and bpy.utils.user_resource("SCRIPTS").startswith(user_scripts), \
-        "the add-on must be installed into a temporary user scripts directory"
-    bpy.ops.preferences.addon_install(filepath=zips[-1], overwrite=True)
-    bpy.ops.preferences.addon_enable(module=MODULE)
-    assert MODULE in bpy.context.preferences.addons, "add-on not enabled"
-    installed = os.path.join(bpy.utils.user_resource("SCRIPTS"), "addons", MODULE)
-    assert os.path.exists(os.path.join(installed, "lib", "libqgp.so")), "native library not installed"
-    return sys.modules[MODULE]
 
 
 def expect_operator_error(op, **kwargs):
@@ -106,13 +91,13 @@ def test_broken_inputs(binding):
     bpy.context.view_layer.objects.active = obj
     assert bpy.ops.object.join() == {"FINISHED"}
     assert len(obj.data.polygons) == 64 * 24 + 16, len(obj.data.polygons)
-    before = mesh_data_state(obj)
+    before = addon_checks.mesh_data_state(obj)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         assert bpy.ops.object.qgp_quad_remesh(target_faces=600, keep_source_visible=True) == {"FINISHED"}
     warning = next(line for line in out.getvalue().splitlines() if line.startswith("Warning:"))
     assert "complete except 1 part(s)" in warning and "non-orientable" in warning, warning
-    assert mesh_data_state(obj) == before, "the source changed"
+    assert addon_checks.mesh_data_state(obj) == before, "the source changed"
     quad = bpy.data.objects[obj.name + "_quads"]
     kept = [p for p in quad.data.polygons if len(p.vertices) == 3]
     assert len(kept) == 16 and all(p.select == (len(p.vertices) == 3) for p in quad.data.polygons), len(kept)
@@ -122,13 +107,13 @@ def test_broken_inputs(binding):
     # warning; the source is unchanged.
     reset_scene()
     truck = import_mesh(binding, "truck.obj")
-    before = mesh_data_state(truck)
+    before = addon_checks.mesh_data_state(truck)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):  # bpy.ops writes an operator's reports to sys.stdout
         assert bpy.ops.object.qgp_quad_remesh(target_faces=500, keep_source_visible=True) == {"FINISHED"}
     warning = next(line for line in out.getvalue().splitlines() if line.startswith("Warning:"))
     assert "complete except" in warning and "try more quads" in warning, warning
-    assert mesh_data_state(truck) == before, "the source changed"
+    assert addon_checks.mesh_data_state(truck) == before, "the source changed"
     print(f"truck.obj: cut at intake, thin parts kept as triangles: {warning[:120]}")
     # Teapot: its 403 duplicate boundary positions are welded (4 parts, not 19 loose patches with
     # 38 non-manifold vertices), and 500 quads then fit.
@@ -294,14 +279,6 @@ def test_quad_remesh(binding):
               f"kept{extra}")
 
 
-def mesh_data_state(obj):
-    """Everything of an object's mesh data an operator could change."""
-    m = obj.data
-    return (m.name, len(m.vertices), len(m.edges), len(m.polygons), [tuple(v.co) for v in m.vertices],
-            [tuple(p.vertices) for p in m.polygons], [e.use_seam for e in m.edges],
-            [layer.name for layer in m.uv_layers], [p.select for p in m.polygons], [len(obj.modifiers)])
-
-
 def test_keep_source_visible():
     """Keep Source Visible (the remesh operator's keep_source_visible, also in the panel): on, the
     source stays visible; off (the default), it is hidden; either way its mesh data is unchanged and
@@ -311,7 +288,7 @@ def test_keep_source_visible():
     reset_scene()
     bpy.ops.mesh.primitive_torus_add(major_segments=48, minor_segments=16)
     torus = bpy.context.active_object
-    before = mesh_data_state(torus)
+    before = addon_checks.mesh_data_state(torus)
     for keep in (True, False):
         select_only(torus)
         assert not torus.hide_get()
@@ -321,7 +298,7 @@ def test_keep_source_visible():
         assert quad is not torus and not quad.hide_get()
         assert torus.hide_get() is (not keep), (keep, torus.hide_get())
         assert torus.visible_get() is keep
-        assert mesh_data_state(torus) == before, "the source's mesh data changed"
+        assert addon_checks.mesh_data_state(torus) == before, "the source's mesh data changed"
         torus.hide_set(False)
     print("Keep Source Visible: on keeps the source shown, off hides it; its data unchanged")
 
@@ -541,13 +518,13 @@ def test_parts_kept_as_triangles(binding):
     reset_scene()
     obj = import_mesh(binding, "featuretype.ply")
     select_only(obj)
-    before = mesh_data_state(obj)
+    before = addon_checks.mesh_data_state(obj)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):  # bpy.ops writes an operator's reports to sys.stdout
         result = bpy.ops.object.qgp_quad_remesh(target_faces=2000, weld=False, keep_source_visible=True)
     print(out.getvalue(), end="")
     assert result == {"FINISHED"}, result
-    assert mesh_data_state(obj) == before, "the source changed"
+    assert addon_checks.mesh_data_state(obj) == before, "the source changed"
     quad = bpy.data.objects[obj.name + "_quads"]
     figures = quad["qgp"].to_dict()
     kept = [p for p in quad.data.polygons if len(p.vertices) == 3]
@@ -596,7 +573,7 @@ def test_batch_unexpected_failure():
 
 
 def main():
-    addon = install_addon()
+    addon = addon_checks.install_legacy_addon(REPO, MODULE)
     from importlib import import_module
     binding = import_module(MODULE + ".core.binding")
     print("installed", addon.__file__, "library", binding.version())

@@ -7,7 +7,6 @@ blender -b has no window, so no timer, modal handler or key press: this script i
 presses Esc as a user would (real input is ignored). It checks what that run found: a modal run
 finishes on its timer with the quads; Esc while the native job runs cancels the job without
 blocking Blender, leaves the scene unchanged, and the operator returns CANCELLED."""
-import glob
 import json
 import os
 import shutil
@@ -17,18 +16,11 @@ import tempfile
 
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import addon_checks  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MODULE = "quantized_retopo"
-
-
-def install_addon():
-    zips = sorted(glob.glob(os.path.join(REPO, "dist", MODULE + "-*-legacy.zip")))
-    assert zips, "build the zips first (scripts/build_extension.py)"
-    user_scripts = os.environ.get("BLENDER_USER_SCRIPTS")
-    assert user_scripts and bpy.utils.user_resource("SCRIPTS").startswith(user_scripts), \
-        "the add-on must be installed into a temporary user scripts directory"
-    bpy.ops.preferences.addon_install(filepath=zips[-1], overwrite=True)
-    assert os.path.exists(os.path.join(bpy.utils.user_resource("SCRIPTS"), "addons", MODULE, "__init__.py"))
 
 
 def run_windowed():
@@ -73,7 +65,7 @@ def check(result):
 
 
 def main():
-    install_addon()
+    addon_checks.install_legacy_addon(REPO, MODULE, enable=False)
     check(run_windowed())
     print("modal test: OK")
 

@@ -246,6 +246,29 @@ TEST(Intake, RefusesNonOrientableMoebiusStrip) {
   EXPECT_NE(msg.find("non-orientable"), std::string::npos) << msg;
 }
 
+// Zero-area is judged against each part's own size: a tetrahedron a millionth the size of another
+// keeps its four faces (it used to collapse, judged against the whole mesh's diagonal).
+TEST(Intake, TinyPartKeepsItsFaces) {
+  PolygonSoup s;
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  for (const double size : {1e-6, 1.0}) {
+    const int base = s.num_vertices();
+    const Vec3 at(size < 1 ? 0.0 : 5.0, 0, 0);
+    for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)})
+      s.positions.push_back(at + size * p);
+    for (const auto& f : faces) {
+      const int t[3] = {base + f[0], base + f[1], base + f[2]};
+      s.add_face(t, 3);
+    }
+  }
+  Progress progress;
+  const IntakeResult r = run_intake(s, IntakeOptions{}, progress);
+  EXPECT_EQ(repair_count(r, "zero_area_faces"), 0);
+  ASSERT_EQ(r.components.size(), 2u);
+  EXPECT_EQ(r.mesh.num_faces(), 8);
+  for (const ComponentInfo& c : r.components) EXPECT_EQ(c.euler_characteristic, 2);
+}
+
 TEST(Intake, UnreadableFilesAreNamed) {
   try {
     read_mesh_file("/nonexistent/mesh.obj");

@@ -143,12 +143,7 @@ class ZeroAreaRepair {
  public:
   ZeroAreaRepair(TriangleSoup& soup, double zero_area, double flatness)
       : soup_(soup), zero_area_(zero_area), flatness_(flatness) {
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-    for (const Vec3& p : soup.positions) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    diag2_ = (hi - lo).squaredNorm();
+    measure_parts();
   }
 
   // Number of degenerate triangles in the soup.
@@ -194,7 +189,26 @@ class ZeroAreaRepair {
       longest2 = std::max(
           longest2,
           (soup_.positions[soup_.triangles[t][(k + 1) % 3]] - soup_.positions[soup_.triangles[t][k]]).squaredNorm());
-    return area <= zero_area_ * diag2_ || 2 * area <= flatness_ * longest2;
+    return area <= zero_area_ * part_diag2_[soup_.triangles[t][0]] || 2 * area <= flatness_ * longest2;
+  }
+
+  // Per vertex, the squared bounding-box diagonal of its edge-connected part: "tiny" is relative to
+  // the part, so a part a millionth the size of the others keeps its triangles. Repairs only
+  // collapse within a part, so a vertex stays in its part.
+  void measure_parts() {
+    int num_parts = 0;
+    const std::vector<int> part = edge_connected_components(soup_, &num_parts);
+    std::vector<Vec3> lo(num_parts, Vec3::Constant(INFINITY)), hi(num_parts, Vec3::Constant(-INFINITY));
+    std::vector<int> part_of_vertex(soup_.positions.size(), -1);
+    for (size_t t = 0; t < soup_.triangles.size(); ++t)
+      for (int v : soup_.triangles[t]) {
+        part_of_vertex[v] = part[t];
+        lo[part[t]] = lo[part[t]].cwiseMin(soup_.positions[v]);
+        hi[part[t]] = hi[part[t]].cwiseMax(soup_.positions[v]);
+      }
+    part_diag2_.assign(soup_.positions.size(), 0);
+    for (size_t v = 0; v < soup_.positions.size(); ++v)
+      if (part_of_vertex[v] >= 0) part_diag2_[v] = (hi[part_of_vertex[v]] - lo[part_of_vertex[v]]).squaredNorm();
   }
 
   // Adjacency for this pass: triangles per edge and per vertex.
@@ -241,7 +255,8 @@ class ZeroAreaRepair {
     for (int k = 0; k < 3; ++k) len[k] = (soup_.positions[tri[(k + 1) % 3]] - soup_.positions[tri[k]]).norm();
     const int shortest = static_cast<int>(std::min_element(len, len + 3) - len);
     const int longest = static_cast<int>(std::max_element(len, len + 3) - len);
-    const bool needle = len[shortest] <= 1e-3 * len[longest] || triangle_area(soup_, t) <= zero_area_ * diag2_;
+    const bool needle =
+        len[shortest] <= 1e-3 * len[longest] || triangle_area(soup_, t) <= zero_area_ * part_diag2_[tri[0]];
     return needle ? (try_collapse(tri, shortest) || try_flip(t, tri, longest))
                   : (try_flip(t, tri, longest) || try_collapse(tri, shortest));
   }
@@ -291,7 +306,7 @@ class ZeroAreaRepair {
 
   TriangleSoup& soup_;
   double zero_area_, flatness_;
-  double diag2_ = 0;  // squared bounding box diagonal
+  std::vector<double> part_diag2_;  // per vertex: squared bounding-box diagonal of its part
   // State of one pass.
   std::unordered_map<uint64_t, std::vector<int>> edge_tris_;
   std::vector<std::vector<int>> vertex_tris_;
