@@ -3,6 +3,15 @@
 import math
 
 
+def write_obj(path, vertices, faces):
+    """An OBJ of the vertices and faces (0-based indices)."""
+    with open(path, "w") as f:
+        for p in vertices:
+            f.write("v %r %r %r\n" % tuple(p))
+        for face in faces:
+            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
+
+
 def moebius_strip(n=8, width=0.3, centre=(0.0, 0.0, 0.0)):
     """A Moebius strip (n quads, 2n triangles) around a circle of radius 2: non-orientable, so it has
     no quad mesh."""

@@ -8,8 +8,9 @@ a piece of the message for the last two, and the repairs intake must report. The
 test; `validate_output` checks the polygon mesh any of them produced."""
 import math
 import os
+import sys
 
-from shapes import grid_cube, merged, moebius_strip, plane_grid, torus, transformed, uv_sphere
+from shapes import grid_cube, merged, moebius_strip, plane_grid, torus, transformed, uv_sphere, write_obj
 
 TARGET_QUADS = 500
 TIMEOUT_S = 300  # a case that runs longer is a hang
@@ -21,19 +22,10 @@ class Case:
         self.repairs, self.note = tuple(repairs), note
 
 
-def write_obj(path, shape):
-    vertices, faces = shape
-    with open(path, "w") as f:
-        for p in vertices:
-            f.write("v %r %r %r\n" % tuple(p))
-        for face in faces:
-            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
-
-
 def obj_writer(make):
     def write(folder, name):
         path = os.path.join(folder, name + ".obj")
-        write_obj(path, make())
+        write_obj(path, *make())
         return path
     return write
 
@@ -151,6 +143,22 @@ CASES = [
     Case("nan_coordinates", obj_writer(nan_coordinates), "refused", "vertex 5"),
     Case("truncated_file", truncated_ply, "refused", "truncated"),
 ]
+
+
+class Checks:
+    """Failed checks of a driver, printed as they happen; exit() ends the driver with their count."""
+    def __init__(self):
+        self.failures = []
+
+    def __call__(self, condition, what):
+        if not condition:
+            print("FAIL " + what)
+            self.failures.append(what)
+
+    def exit(self, driver):
+        if self.failures:
+            sys.exit(f"{len(self.failures)} check(s) failed")
+        print(f"torture set ({driver}): all {len(CASES)} cases as documented")
 
 
 EXIT_STATUS = {"quads": 0, "partial": 5, "refused": 2, "failed": 3}  # the CLI's exit status per outcome

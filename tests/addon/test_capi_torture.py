@@ -21,13 +21,7 @@ from core import binding  # noqa: E402
 
 STATUS = {"quads": "ok", "partial": "partial"}
 ERROR_CODE = {"refused": (binding.ERR_INVALID_MESH, binding.ERR_UNREADABLE_FILE), "failed": (binding.ERR_STAGE_FAILED,)}
-FAILURES = []
-
-
-def check(condition, what):
-    if not condition:
-        print("FAIL " + what)
-        FAILURES.append(what)
+check = torture_set.Checks()
 
 
 def remesh(path):
@@ -72,9 +66,7 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         for case in torture_set.CASES:
             run_case(case, folder)
-    if FAILURES:
-        sys.exit(f"{len(FAILURES)} check(s) failed")
-    print(f"torture set (C API): all {len(torture_set.CASES)} cases as documented")
+    check.exit("C API")
 
 
 if __name__ == "__main__":

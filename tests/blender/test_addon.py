@@ -17,7 +17,7 @@ from addon_checks import (check_quad_object, check_sharp_edges_kept, grid_seam_r
                           mark_sharp_edges, reset_scene, run_batch, run_grid_uv, run_quad_remesh, scene_state,
                           seam_edges, select_only, uv_cut_edges)
 import addon_checks  # noqa: E402
-from shapes import moebius_strip  # noqa: E402
+from shapes import moebius_strip, write_obj  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ARGS = addon_checks.script_arguments()
@@ -53,14 +53,6 @@ def test_registration():
     draw_funcs = getattr(bpy.types.VIEW3D_MT_object.draw, "_draw_funcs", [])
     assert any(getattr(f, "__module__", "").startswith(MODULE) for f in draw_funcs), "Object menu entry missing"
     print("registration: OK")
-
-
-def write_obj(path, vertices, faces):
-    with open(path, "w") as f:
-        for v in vertices:
-            f.write("v %r %r %r\n" % tuple(v))
-        for face in faces:
-            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
 
 
 def test_broken_inputs(binding):

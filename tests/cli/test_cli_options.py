@@ -20,7 +20,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
-from shapes import moebius_strip  # noqa: E402
+from shapes import moebius_strip, write_obj  # noqa: E402
 
 FAILURES = []
 
@@ -270,11 +270,7 @@ def test_non_orientable_part(qgp, meshes, tmp):
     vertices, faces, _ = read_obj(os.path.join(meshes, "spot.obj"))
     strip_vertices, strip_faces = moebius_strip(centre=(10.0, 0.0, 0.0))
     path, out = os.path.join(tmp, "spot_and_strip.obj"), os.path.join(tmp, "spot_and_strip_quads.obj")
-    with open(path, "w") as f:
-        for v in vertices + strip_vertices:
-            f.write("v %r %r %r\n" % tuple(v))
-        for face in faces + [[len(vertices) + i for i in t] for t in strip_faces]:
-            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
+    write_obj(path, vertices + strip_vertices, faces + [[len(vertices) + i for i in t] for t in strip_faces])
     report = os.path.join(tmp, "strip.json")
     proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, "--report", report)
     r = json.load(open(report))

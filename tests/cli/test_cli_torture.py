@@ -17,13 +17,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/
 import torture_set  # noqa: E402
 
-FAILURES = []
-
-
-def check(condition, what):
-    if not condition:
-        print("FAIL " + what)
-        FAILURES.append(what)
+check = torture_set.Checks()
 
 
 def read_obj(path):
@@ -80,9 +74,7 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         for case in torture_set.CASES:
             run_case(args.qgp, case, folder)
-    if FAILURES:
-        sys.exit(f"{len(FAILURES)} check(s) failed")
-    print(f"torture set (CLI): all {len(torture_set.CASES)} cases as documented")
+    check.exit("CLI")
 
 
 if __name__ == "__main__":
