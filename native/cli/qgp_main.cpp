@@ -270,6 +270,9 @@ void print_remesh_summary(const qgp::Json& report) {
             << q.value("irregular_vertices", 0) << ", min scaled Jacobian " << q.value("min_scaled_jacobian", 0.0)
             << ", " << report["timings_s"].value("total", 0.0) << " s, peak memory "
             << static_cast<long>(report.value("peak_memory_mb", 0.0)) << " MB\n";
+  const qgp::Json count = report.contains("quantization") ? report["quantization"].value("count", qgp::Json::object())
+                                                          : qgp::Json::object();
+  if (count.contains("note")) std::cout << "note: " << count["note"].get<std::string>() << "\n";
   const int flipped = q.value("flipped_quads", 0);
   if (flipped > 0)
     std::cout << "warning: " << flipped << " quad(s) face against the input surface (report: quad.flipped_quad_ids, "

@@ -155,6 +155,25 @@ def test_edge_length(qgp, meshes, tmp):
     check(proc.returncode == 0 and r["seamless"]["edge_length"] == 0.05, "--edge-length: the map is solved for it")
 
 
+def test_quad_count(qgp, meshes, tmp):
+    """--faces: within 5 % of the count asked (bunny.off and fandisk at 40 degrees, 1 000 quads);
+    below the fewest the layout allows (spot at 20), that many quads and a note naming the minimum."""
+    for name, extra in (("bunny.off", []), ("fandisk.obj", ["--sharp-angle", 40])):
+        out = os.path.join(tmp, "count.obj")
+        proc = run(qgp, "remesh", os.path.join(meshes, name), "-o", out, "--faces", 1000, *extra)
+        quads = sum(1 for line in open(out) if line.startswith("f ")) if proc.returncode == 0 else 0
+        check(abs(quads - 1000) <= 50 and "note:" not in proc.stdout,
+              f"{name} {' '.join(map(str, extra))} --faces 1000: {quads} quads, within 5 %")
+    report = os.path.join(tmp, "count.json")
+    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", os.path.join(tmp, "few.obj"), "--faces", 20,
+               "--report", report)
+    count = json.load(open(report))["quantization"]["count"] if proc.returncode == 0 else {}
+    fewest = count.get("fewest_quads", 0)
+    check(proc.returncode == 0 and fewest > 21 and count["quads"] >= fewest
+          and f"note: 20 quads asked, {count['quads']} made: {fewest} is the fewest this layout allows" in proc.stdout,
+          f"spot --faces 20: exit 0, the fewest quads named on stdout ({proc.stdout.strip()[-160:]})")
+
+
 def test_features(qgp, meshes, tmp):
     joint = os.path.join(meshes, "joint.obj")
     vertices, faces, _ = read_obj(joint)
@@ -296,6 +315,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
+                     test_quad_count,
                      test_features, test_drop_bad_components, test_weld, test_partial, test_non_orientable_part):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):

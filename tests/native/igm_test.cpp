@@ -102,7 +102,7 @@ ComponentState component_of(const Chain& c) {
   s.traced.store(s.seamless.id(), TracedMap{c.field.feature_edge, c.sanitized, c.tmesh});
   Quantized q;
   q.result = c.quantization;
-  s.quantization.store({s.traced.id(), c.quantization.scale, Quantizer::Greedy}, q);
+  s.quantization.store({s.traced.id(), c.quantization.scale, 0, Quantizer::Greedy}, q);
   return s;
 }
 

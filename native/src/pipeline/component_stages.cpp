@@ -76,11 +76,14 @@ void update_tmesh(ComponentState& state, Progress& progress) {
   state.traced.store(state.seamless.id(), std::move(traced));
 }
 
-void update_quantization(ComponentState& state, double edge_length, Quantizer quantizer, Progress& progress) {
-  const QuantizationKey key{state.traced.id(), state.seamless_edge_length() / edge_length, quantizer};
+void update_quantization(ComponentState& state, double edge_length, double target_quads, Quantizer quantizer,
+                         Progress& progress) {
+  const QuantizationKey key{state.traced.id(), state.seamless_edge_length() / edge_length, target_quads, quantizer};
   if (state.quantization.computed_from(key)) return;
   switch (quantizer) {
-    case Quantizer::Greedy: state.quantization.store(key, quantize_without_folds(state, key.scale, progress)); return;
+    case Quantizer::Greedy:
+      state.quantization.store(key, quantize_to_count(state, key.scale, target_quads, progress));
+      return;
     case Quantizer::Round:
       state.quantization.store(key, quantize_by_rounding_baseline(state, key.scale, progress));
       return;

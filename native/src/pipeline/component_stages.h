@@ -16,8 +16,10 @@ void update_cut_graph(ComponentState& state, Progress& progress);
 void update_seamless_map(ComponentState& state, double edge_length, Progress& progress);
 // Stage 2: the seamless map made exact with features and boundary on isolines, and its T-mesh.
 void update_tmesh(ComponentState& state, Progress& progress);
-// Stage 3: integer T-edge lengths for quads of `edge_length`, by the chosen quantizer.
-void update_quantization(ComponentState& state, double edge_length, Quantizer quantizer, Progress& progress);
+// Stage 3: integer T-edge lengths for quads of `edge_length`, by the chosen quantizer; the greedy
+// one moves toward `target_quads` quads when it is > 0 (quantize_to_count).
+void update_quantization(ComponentState& state, double edge_length, double target_quads, Quantizer quantizer,
+                         Progress& progress);
 // Stage 4: the integer-grid map (escalating for grid-UV jobs), and for fallback_uv_map the cell map.
 void update_integer_grid_map(ComponentState& state, Job job, Progress& progress);
 void update_cell_map(ComponentState& state, Progress& progress);

@@ -37,6 +37,13 @@ struct Quantized {
   QuantizationResult result;
   int fold_rounds = 0;          // re-quantizations that kept folding zero edges at 1 (greedy)
   int kept_positive_edges = 0;  // T-edges kept at length >= 1 by them
+  // The quad count asked of this component (0: none, an edge length was asked), the scale the
+  // density gave, the re-quantizations that moved the scale toward the count, and the fewest
+  // quads the layout allows when they are more than asked (-1: not measured).
+  double target_quads = 0;
+  double nominal_scale = 0;
+  int count_rounds = 0;
+  int64_t fewest_quads = -1;
   // The round baseline's rounded map: it is the integer-grid map of that quantization.
   std::optional<RoundedMap> rounded;
 };
@@ -89,10 +96,11 @@ struct SeamlessKey {
 };
 struct QuantizationKey {
   uint64_t traced = 0;
-  double scale = 0;  // quads per seamless uv unit
+  double scale = 0;         // quads per seamless uv unit, as the density gives it
+  double target_quads = 0;  // the component's share of the quad count asked (0: an edge length)
   Quantizer quantizer = Quantizer::Greedy;
   bool operator==(const QuantizationKey& o) const {
-    return traced == o.traced && scale == o.scale && quantizer == o.quantizer;
+    return traced == o.traced && scale == o.scale && target_quads == o.target_quads && quantizer == o.quantizer;
   }
 };
 

@@ -1,6 +1,8 @@
 #include "pipeline/policy.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -171,6 +173,85 @@ Quantized quantize_without_folds(const ComponentState& state, double scale, Prog
     q.fold_rounds = round + 1;
   }
   for (int64_t m : options.min_length) q.kept_positive_edges += static_cast<int>(m);
+  return q;
+}
+
+namespace {
+
+struct CountTrial {
+  double scale = 0;
+  int64_t quads = 0;
+};
+
+CountTrial quads_at_scale(const TMesh& tmesh, double scale, Progress& progress) {
+  QuantizationOptions options;
+  options.scale = scale;
+  return {scale, quantize(tmesh, options, progress).quads_expected};
+}
+
+// The trials of one component's count search: the closest to the target, the largest scale that
+// gave fewer quads than the target and the smallest that gave more (the bracket), the fewest quads.
+struct CountSearch {
+  double target = 0;
+  CountTrial best;
+  double fewer = 0, more = std::numeric_limits<double>::infinity();
+  int64_t fewest = std::numeric_limits<int64_t>::max();
+  int rounds = 0;
+  bool tried = false;
+
+  bool on_target() const { return std::abs(best.quads - target) <= kCountTolerance * target; }
+  void add(const CountTrial& trial) {
+    if (!tried || std::abs(trial.quads - target) < std::abs(best.quads - target)) best = trial;
+    tried = true;
+    if (trial.quads < target) fewer = std::max(fewer, trial.scale);
+    if (trial.quads > target) more = std::min(more, trial.scale);
+    fewest = std::min(fewest, trial.quads);
+  }
+  // The proportional step from `last`, or the bracket's middle when that step leaves the bracket.
+  double next_scale(const CountTrial& last) const {
+    const double step = last.scale * std::sqrt(target / static_cast<double>(std::max<int64_t>(last.quads, 1)));
+    if (step > fewer && step < more) return step;
+    return fewer > 0 && std::isfinite(more) ? 0.5 * (fewer + more) : step;
+  }
+};
+
+// Moves the scale from `last` toward the search's target, up to kMaxCountRounds trials.
+void search_count_scale(const TMesh& tmesh, CountTrial last, CountSearch& search, Progress& progress) {
+  for (int trial = 0; trial < kMaxCountRounds && !search.on_target(); ++trial, ++search.rounds) {
+    last = quads_at_scale(tmesh, search.next_scale(last), progress);
+    search.add(last);
+  }
+}
+
+}  // namespace
+
+Quantized quantize_to_count(const ComponentState& state, double scale, double target_quads, Progress& progress) {
+  CountSearch search;
+  search.target = target_quads;
+  search.best.scale = scale;
+  int64_t fewest = -1;
+  if (target_quads > 0) {
+    const TMesh& tmesh = state.traced->tmesh;
+    const CountTrial first = quads_at_scale(tmesh, scale, progress);
+    search.add(first);
+    search_count_scale(tmesh, first, search, progress);
+    if (search.best.quads > (1 + 2 * kCountTolerance) * target_quads) {
+      // Too many quads still: at a vanishing scale the quantizer keeps only the lengths validity
+      // needs. When that gives fewer than the target, the search goes on inside the bracket.
+      const CountTrial floor = quads_at_scale(tmesh, scale * 1e-3, progress);
+      search.fewest = std::min(search.fewest, floor.quads);
+      if (floor.quads < target_quads) {
+        search.fewer = std::max(search.fewer, floor.scale);
+        search_count_scale(tmesh, search.best, search, progress);
+      }
+      fewest = search.fewest;
+    }
+  }
+  Quantized q = quantize_without_folds(state, search.best.scale, progress);
+  q.target_quads = target_quads;
+  q.nominal_scale = scale;
+  q.count_rounds = search.rounds;
+  q.fewest_quads = fewest;
   return q;
 }
 

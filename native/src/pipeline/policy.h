@@ -2,7 +2,10 @@
 // function each, read top to bottom; each result says which rung it ended on. The stages under
 // native/src compute; only this file chooses between their results.
 //
-//   quantization   quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
+//   quantization   quantize_to_count        the density's scale; moved toward the quad count asked
+//                                           when its count is off; the fewest quads measured when
+//                                           more than asked remain
+//                  quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
 //                                           the quad layout kept at length 1, quantized again
 //   integer-grid   solve_integer_grid_map   default solve; for grid UVs the re-linearized penalty
 //   map                                     phase and the all-faces solve; then the map untangle
@@ -36,6 +39,24 @@ bool seamless_map_serves(double solved_for, double edge_length);
 // both sides of one edge): the zero edges there, and in a widening ring of cells around, are kept
 // at length 1 and the T-mesh is quantized again, up to kMaxFoldRounds times.
 Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress);
+
+// Re-quantizations that move the scale toward a component's share of the quad count asked...
+constexpr int kMaxCountRounds = 8;
+// ...until its count is within this share of the target (so the whole mesh is within +-5 %).
+constexpr double kCountTolerance = 0.025;
+
+// The component's greedy quantization for `target_quads` quads (0: no count asked, an edge length
+// was): first at the density's `scale` (its ideal quads are the surface area over the edge length
+// squared, but the T-mesh layout rounds short arcs up, most at coarse densities); while its count
+// is more than kCountTolerance off the target, the scale moves by sqrt(target / count), or to the
+// middle of the bracket of scales that gave fewer and more quads when that step leaves it, up to
+// kMaxCountRounds times. When the closest count is still more than twice kCountTolerance above the
+// target, the fewest quads the layout allows are measured (a quantization at a vanishing scale keeps
+// only the lengths validity needs) into fewest_quads; when they are fewer than the target, the
+// search goes on up to kMaxCountRounds more times inside the bracket. The closest count's scale
+// (never the vanishing one, whose quads ignore the surface's proportions) is quantized by
+// quantize_without_folds.
+Quantized quantize_to_count(const ComponentState& state, double scale, double target_quads, Progress& progress);
 
 // Quads have a fallback (the T-mesh layout), grid UVs do not: only grid-UV jobs pay for the
 // integer-grid map's escalating attempts.

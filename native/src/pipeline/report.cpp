@@ -1,6 +1,7 @@
 #include "pipeline/report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "intake/working_mesh.h"
@@ -128,6 +129,37 @@ Json tmesh_report(const std::vector<ComponentState>& components) {
   return total;
 }
 
+namespace {
+
+// The quad count asked and made: {target, quads, fewest_quads, note}. fewest_quads, with a note,
+// when the quads are more than 5 % off the target: the sum over components of the fewest quads
+// their layout allows where that was measured, else of their quads.
+Json count_report(const std::vector<ComponentState>& components) {
+  double target = 0;
+  int64_t quads = 0, fewest = 0, singular = 0;
+  for (const ComponentState& state : components) {
+    if (state.failure) continue;
+    const Quantized& q = *state.quantization;
+    target += q.target_quads;
+    quads += q.result.quads_expected;
+    fewest += q.fewest_quads >= 0 ? q.fewest_quads : q.result.quads_expected;
+    for (int index : state.field->vertex_index) singular += index != 0;
+  }
+  Json count = {{"target", std::lround(target)}, {"quads", quads}};
+  if (!(target > 0) || std::abs(quads - target) <= 0.05 * target) return count;
+  count["fewest_quads"] = fewest;
+  const std::string asked = std::to_string(std::lround(target)) + " quads asked, " + std::to_string(quads) + " made: ";
+  if (fewest > 1.05 * target)
+    count["note"] = asked + std::to_string(fewest) + " is the fewest this layout allows (the cross field's " +
+                    std::to_string(singular) + " singular points and the features and boundaries need whole quads " +
+                    "between them)";
+  else
+    count["note"] = asked + "the quantization found no closer count";
+  return count;
+}
+
+}  // namespace
+
 Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer) {
   Json per_component = Json::array();
   int64_t quads = 0;
@@ -136,10 +168,18 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
     const Quantized& q = *state.quantization;
     quads += q.result.quads_expected;
     per_component.push_back(q.result);
-    per_component.back()["fold_rounds"] = q.fold_rounds;
-    per_component.back()["kept_positive_edges"] = q.kept_positive_edges;
+    Json& entry = per_component.back();
+    entry["fold_rounds"] = q.fold_rounds;
+    entry["kept_positive_edges"] = q.kept_positive_edges;
+    entry["target_quads"] = q.target_quads;
+    entry["nominal_scale"] = q.nominal_scale;
+    entry["count_rounds"] = q.count_rounds;
+    if (q.fewest_quads >= 0) entry["fewest_quads"] = q.fewest_quads;
   }
-  return {{"method", quantizer_name(quantizer)}, {"quads_expected", quads}, {"components", std::move(per_component)}};
+  return {{"method", quantizer_name(quantizer)},
+          {"quads_expected", quads},
+          {"count", count_report(components)},
+          {"components", std::move(per_component)}};
 }
 
 Json igm_report(const std::vector<ComponentState>& components) {

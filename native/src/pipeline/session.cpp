@@ -102,11 +102,26 @@ double Session::target_edge_length() const {
   return std::sqrt(area / faces);
 }
 
-int Session::component_face_budget(int component, double edge_length) const {
+double Session::component_area(int component) const {
   double area = 0;
   const TriMesh& m = intake_->mesh;
   for (int f : intake_->components[component].faces) area += 0.5 * m.face_normal_unnormalized(f).norm();
-  return working_face_budget(area / (edge_length * edge_length));
+  return area;
+}
+
+int Session::component_face_budget(int component, double edge_length) const {
+  return working_face_budget(component_area(component) / (edge_length * edge_length));
+}
+
+std::vector<double> Session::component_quad_targets() const {
+  const int n = static_cast<int>(intake_->components.size());
+  std::vector<double> targets(n, 0.0);
+  if (options_.edge_length > 0) return targets;
+  const double faces = options_.target_faces > 0 ? options_.target_faces : RemeshOptions::kDefaultTargetFaces;
+  double total = 0;
+  for (int c = 0; c < n; ++c) total += targets[c] = component_area(c);
+  for (double& t : targets) t = total > 0 ? faces * t / total : 0.0;
+  return targets;
 }
 
 bool Session::prepared_components_fit(Job job) const {
@@ -228,8 +243,10 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   report_["seamless"] = seamless_report(components_, edge_length);
   for_each_component("tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
   report_["tmesh"] = tmesh_report(components_);
-  for_each_component("quantization", progress,
-                     [&](ComponentState& s) { update_quantization(s, edge_length, options_.quantizer, progress); });
+  const std::vector<double> quad_targets = component_quad_targets();
+  for_each_component("quantization", progress, [&](ComponentState& s) {
+    update_quantization(s, edge_length, quad_targets[&s - components_.data()], options_.quantizer, progress);
+  });
   report_["quantization"] = quantization_report(components_, options_.quantizer);
   for_each_component("igm", progress, [&](ComponentState& s) {
     update_integer_grid_map(s, job, progress);
