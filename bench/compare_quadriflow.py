@@ -43,7 +43,8 @@ MANIFOLD_MESHES = {
 
 COLUMNS = ["mesh", "category", "input_triangles", "target", "tool", "status", "message", "seconds", "quads",
            "faces", "non_quads", "irregular_vertices", "flipped_quads", "euler_characteristic_preserved",
-           "hausdorff", "hausdorff_result_to_input", "hausdorff_input_to_result", "mean_angle_deviation_deg",
+           "quads_per_target", "fewest_quads", "hausdorff", "hausdorff_result_to_input", "hausdorff_input_to_result",
+           "mean_angle_deviation_deg",
            "p95_angle_deviation_deg", "min_scaled_jacobian", "sharp_edges", "sharp_edge_coverage",
            "non_manifold_edges", "stage_seconds"]
 
@@ -120,8 +121,8 @@ def mesh_polygons(mesh):
 
 def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
     """Quantized Retopo the way the operator runs it (same mesh glue, a worker process), with a cancel
-    after `timeout` s. Returns (status, message, result object or None, stage seconds dict); status
-    "crashed" when the worker process died (Blender goes on)."""
+    after `timeout` s. Returns (status, message, result object or None, the native report or {});
+    status "crashed" when the worker process died (Blender goes on)."""
     blender_mesh = sys.modules[addon.__name__ + ".blender_mesh"]
     worker = sys.modules[addon.__name__ + ".core.worker"]
     session = None
@@ -143,24 +144,24 @@ def run_qgp(addon, binding, source, target, sharp_angle, timeout, quantizer=""):
             if state == binding.STATE_RUNNING:  # the cancel was not honoured: close() ends the process
                 return "timeout", f"cancelled after {timeout:.0f} s; the cancel was not honoured within 30 s", \
                     None, {}
-            return "timeout", f"cancelled after {timeout:.0f} s", None, stage_seconds(session)
+            return "timeout", f"cancelled after {timeout:.0f} s", None, native_report(session)
         vertices, quads, quad_triangle = session.quad_mesh()
         result = blender_mesh.create_quad_object(bpy.context, source, vertices, quads, quad_triangle, src)
-        return "ok", "", result, stage_seconds(session)
+        return "ok", "", result, native_report(session)
     except binding.QGPError as e:
         if session is not None and not session.alive:
             return "crashed", e.message, None, {}
-        return "refused", e.message, None, stage_seconds(session)
+        return "refused", e.message, None, native_report(session)
     finally:
         if session is not None:
             session.close()
 
 
-def stage_seconds(session):
+def native_report(session):
     if session is None:
         return {}
     try:
-        return session.report().get("timings_s", {})
+        return session.report()
     except Exception:  # the report is informative only
         return {}
 
@@ -227,10 +228,13 @@ def run_case(addon, binding, args, name, category, data, target, tool):
     result = None
     start = time.perf_counter()
     if tool == "qgp":
-        status, message, result, stages = run_qgp(addon, binding, source, target,
+        status, message, result, report = run_qgp(addon, binding, source, target,
                                                   args.sharp_angle if is_cad else -1.0, args.timeout,
                                                   args.quantizer)
+        stages = report.get("timings_s", {})
         row["stage_seconds"] = ";".join(f"{k}={v:.3f}" for k, v in stages.items() if isinstance(v, (int, float)))
+        # The fewest quads the layout allows, when the report names it (the count asked is below it).
+        row["fewest_quads"] = report.get("quantization", {}).get("count", {}).get("fewest_quads", "")
     else:
         status, message, result = run_quadriflow(source, target)
     row["seconds"] = round(time.perf_counter() - start, 3)
@@ -238,6 +242,7 @@ def run_case(addon, binding, args, name, category, data, target, tool):
     if result is not None:
         try:
             m = measure(binding, result, vertices, triangles, args.sharp_angle if is_cad else -1.0)
+            row["quads_per_target"] = round(m.get("quads", 0) / target, 4)
             row.update({k: m.get(k) for k in ["quads", "faces", "non_quads", "irregular_vertices", "flipped_quads",
                                               "euler_characteristic_preserved", "hausdorff",
                                               "mean_angle_deviation_deg", "p95_angle_deviation_deg",

@@ -46,12 +46,37 @@ def read_csv(path):
 
 # -- comparison --
 
+def quads_per_target(r):
+    """Quads over the count asked (rows written before the column existed: from quads and target)."""
+    ratio = number(r.get("quads_per_target"))
+    if ratio is None and number(r.get("quads")) is not None:
+        ratio = number(r["quads"]) / number(r["target"])
+    return ratio
+
+
+def count_cell(r):
+    """'1.02', or with the fewest quads the report names when the count asked is below them: '1.35 (≥ 2 700)'."""
+    ratio = quads_per_target(r)
+    fewest = number(r.get("fewest_quads"))
+    if ratio is None:
+        return "—"
+    return f"{ratio:.2f}" + (f" (≥ {fewest:,.0f})".replace(",", " ") if fewest else "")
+
+
+def count_kept(r):
+    """The count asked was met: within 5 %, or below the fewest quads the report names."""
+    ratio, fewest = quads_per_target(r), number(r.get("fewest_quads"))
+    if ratio is None:
+        return False
+    return abs(ratio - 1) <= 0.05 or (fewest is not None and fewest > 1.05 * number(r["target"]))
+
+
 def cell_values(r):
     """Table cells of one run (dashes where the run produced no mesh)."""
     chi = {"True": "yes", "False": "**no**"}.get(r["euler_characteristic_preserved"], "—")
     sharp = "—" if not r["sharp_edge_coverage"] else f"{100 * float(r['sharp_edge_coverage']):.1f}%"
     hd = "—" if not r["hausdorff"] else f"{100 * float(r['hausdorff']):.2f}"
-    return [fmt(r["seconds"], ".2f"), fmt(r["quads"], ".0f"), fmt(r["irregular_vertices"], ".0f"),
+    return [fmt(r["seconds"], ".2f"), fmt(r["quads"], ".0f"), count_cell(r), fmt(r["irregular_vertices"], ".0f"),
             fmt(r["flipped_quads"], ".0f"), chi, hd, fmt(r["mean_angle_deviation_deg"], ".1f"),
             fmt(r["p95_angle_deviation_deg"], ".1f"), fmt(r["min_scaled_jacobian"], ".2f"), sharp]
 
@@ -59,8 +84,8 @@ def cell_values(r):
 def compare_markdown(rows):
     """One line per mesh and target, each cell 'Quantized Retopo | QuadriFlow'; status messages listed below."""
     tools = [t for t in TOOL_LABEL if any(r["tool"] == t for r in rows)]
-    header = ["time s", "quads", "irregular", "flipped", "χ kept", "Hausdorff % diag", "angle dev mean °",
-              "angle dev p95 °", "min SJ", "sharp coverage"]
+    header = ["time s", "quads", "quads / target", "irregular", "flipped", "χ kept", "Hausdorff % diag",
+              "angle dev mean °", "angle dev p95 °", "min SJ", "sharp coverage"]
     lines = [f"Cells: {' / '.join(TOOL_LABEL[t] for t in tools)}.", "",
              "| mesh | target | status | " + " | ".join(header) + " |",
              "|---|---:|---|" + "---:|" * len(header)]
@@ -103,9 +128,9 @@ def median(values):
 
 
 def compare_summary(rows):
-    lines = ["| tool | runs | ok | refused | unchanged | timeout | crashed | χ kept (of ok) | flipped quads total "
-             "| median time s | median Hausdorff % | median p95 angle ° | median min SJ |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["| tool | runs | ok | refused | unchanged | timeout | crashed | χ kept (of ok) | count kept (of ok) "
+             "| flipped quads total | median time s | median Hausdorff % | median p95 angle ° | median min SJ |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     by_tool = defaultdict(list)
     for r in rows:
         by_tool[r["tool"]].append(r)
@@ -117,6 +142,7 @@ def compare_summary(rows):
             f"| {TOOL_LABEL.get(tool, tool)} | {len(rs)} | {len(ok)} | {count('refused')} | {count('unchanged')} "
             f"| {count('timeout')} | {count('crashed')} "
             f"| {sum(r['euler_characteristic_preserved'] == 'True' for r in ok)} "
+            f"| {sum(count_kept(r) for r in ok)} "
             f"| {sum(int(number(r['flipped_quads']) or 0) for r in ok)} "
             f"| {fmt(median([number(r['seconds']) for r in rs]), '.2f')} "
             f"| {'—' if hd is None else format(100 * hd, '.2f')} "
