@@ -85,12 +85,12 @@ def face_values(values, triangle_polygon, face_triangle):
     return np.asarray(values)[np.asarray(triangle_polygon)[tri]]
 
 
-def corner_vertices(faces):
-    """The vertex of every corner (loop) of a new mesh made from `faces` (vertex index lists, in
-    order: as Mesh.from_pydata lays out the loops)."""
-    if len(faces) == 0:
-        return np.zeros(0, np.int64)
-    return np.concatenate([np.asarray(f, np.int64).reshape(-1) for f in faces])
+def corner_vertices(face_blocks):
+    """The vertex of every corner (loop) of a new mesh whose faces are the rows of the arrays
+    `face_blocks` (quads (q,4), then triangles (t,3), ...), in order: as Mesh.from_pydata lays out
+    the loops."""
+    flat = [np.asarray(block, np.int64).reshape(-1) for block in face_blocks]
+    return np.concatenate(flat) if flat else np.zeros(0, np.int64)
 
 
 def group_weight_matrix(vertex_ids, group_ids, weights, num_vertices, num_groups):

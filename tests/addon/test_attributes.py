@@ -85,7 +85,7 @@ def test_values():
     check(np.allclose(got[0], 0.5 * colors[5] + 0.25 * colors[6] + 0.25 * colors[7]), "corner values")
     got = attributes.face_values(np.array([7, 9]), np.array([1, 0]), np.array([0, 1, 1, 5, -2]))
     check(got.tolist() == [9, 7, 7, 7, 9], f"face values through the source triangle, clamped {got.tolist()}")
-    corners = attributes.corner_vertices([[0, 1, 2, 3], [3, 2, 4]])
+    corners = attributes.corner_vertices([np.array([[0, 1, 2, 3]]), np.array([[3, 2, 4]])])
     check(corners.tolist() == [0, 1, 2, 3, 3, 2, 4], "corner vertices of quads and triangles")
     matrix = attributes.group_weight_matrix([0, 2, 2], [1, 0, 1], [0.5, 0.25, 1.0], 3, 2)
     check(matrix.tolist() == [[0, 0.5], [0, 0], [0.25, 1.0]], f"group weights {matrix.tolist()}")

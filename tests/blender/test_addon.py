@@ -343,6 +343,25 @@ def test_redo_reuses_session():
           f"scale {scales(redo)[0]:.3f}); after a vertex moved: a fresh solve")
 
 
+def test_guides():
+    """Seams, material boundaries and face sets as guides (each an operator option, off by default):
+    a ring of a UV sphere marked each way becomes a curve of quad edges with its option on; the
+    option changes the features, so it re-solves instead of reusing the cached session."""
+    operators = sys.modules[MODULE + ".operators"]
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    for guide, option in (("SEAM", "use_seams"), ("MATERIAL", "use_material_boundaries"),
+                          ("FACE_SET", "use_face_sets")):
+        assert properties[option].default is False, option
+        reset_scene()
+        off, on = addon_checks.run_guide(guide, option)
+        print(f"guide {guide}: ring edges within {on:.3f} (on) / {off:.3f} (off) quad edge lengths of a quad edge")
+    source = bpy.data.objects[0]
+    session = operators._session_cache[source.name][1]
+    select_only(source)
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300, use_face_sets=False) == {"FINISHED"}
+    assert operators._session_cache[source.name][1] is not session, "a changed guide reused the session"
+
+
 def test_select_faces():
     """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
     and vertices; the rest deselected; ids out of range ignored."""
@@ -572,7 +591,7 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
-             (test_redo_reuses_session, ()),
+             (test_redo_reuses_session, ()), (test_guides, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),
