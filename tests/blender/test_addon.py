@@ -362,6 +362,26 @@ def test_guides():
     assert operators._session_cache[source.name][1] is not session, "a changed guide reused the session"
 
 
+def test_attributes_kept():
+    """Keep Attributes (on by default) and Keep Source UVs (off by default): the quad object gets the
+    source's vertex groups, colour and face attributes, and with Keep Source UVs its UV map; with
+    both off only its materials. The source is unchanged."""
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    assert properties["keep_attributes"].default is True and properties["keep_source_uvs"].default is False
+    reset_scene()
+    source = addon_checks.attribute_sphere()
+    before = addon_checks.mesh_data_state(source)
+    for keep_uvs in (False, True):
+        quad = run_quad_remesh(source, target_faces=300, keep_source_visible=True, keep_source_uvs=keep_uvs)
+        error = addon_checks.check_attributes_kept(source, quad, keep_uvs)
+        print(f"attributes kept on {len(quad.data.polygons)} quads (UV map: {keep_uvs}): weights within {error:.4f}")
+        bpy.data.objects.remove(quad)
+    quad = run_quad_remesh(source, target_faces=300, keep_attributes=False)
+    addon_checks.check_attributes_not_kept(quad)
+    assert addon_checks.mesh_data_state(source) == before, "the source changed"
+    print("Keep Attributes off: materials only")
+
+
 def test_select_faces():
     """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
     and vertices; the rest deselected; ids out of range ignored."""
@@ -591,7 +611,7 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
-             (test_redo_reuses_session, ()), (test_guides, ()),
+             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),
