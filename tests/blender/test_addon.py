@@ -382,6 +382,98 @@ def test_attributes_kept():
     print("Keep Attributes off: materials only")
 
 
+class RecordingLayout:
+    """Stands in for a UILayout when drawing headless (blender -b draws no panel): records every
+    property drawn and checks it exists on its data and is drawn without property split (a split
+    cuts long labels at the sidebar's default width); operator buttons check the options set on
+    them against the operator's properties."""
+
+    def __init__(self, drawn, parent=None):
+        self.drawn, self.parent = drawn, parent
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.active = True
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.drawn, self)
+
+    column = row = box = split = _child
+
+    def _split(self):
+        return self.use_property_split or (self.parent is not None and self.parent._split())
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, (data, name)
+        assert not self._split(), f"{name} drawn with property split"
+        self.drawn.append(name)
+
+    def label(self, text="", **kwargs):
+        assert text, "an empty label"
+
+    def separator(self, **kwargs):
+        pass
+
+    def operator(self, idname, **kwargs):
+        self.drawn.append(idname)
+        category, name = idname.split(".")
+        return OptionsCheck(getattr(getattr(bpy.ops, category), name).get_rna_type().properties)
+
+
+class OptionsCheck:
+    """An operator button's options: only the operator's own properties can be set."""
+
+    def __init__(self, properties):
+        object.__setattr__(self, "properties", properties)
+
+    def __setattr__(self, name, value):
+        assert name in self.properties, f"the operator has no option {name}"
+
+
+class RedoOptions:
+    """An operator's options as its redo panel's draw() sees them: the defaults, and the layout."""
+
+    def __init__(self, operator_class, layout):
+        self.bl_rna = getattr(bpy.ops.object, operator_class.bl_idname.split(".")[1]).get_rna_type()
+        self.layout = layout
+        for prop in self.bl_rna.properties:
+            if prop.identifier != "rna_type":
+                setattr(self, prop.identifier, getattr(prop, "default", None))
+        self._draw_target = lambda layout: operator_class._draw_target(self, layout)
+
+
+def test_panel_draws():
+    """The sidebar panel and its sub-panels (Density, Features, Output) and both operators' redo
+    panels draw every option (each with a tooltip), without property split; the panel's buttons get
+    only options their operator has."""
+    ui = sys.modules[MODULE + ".ui"]
+    operators = sys.modules[MODULE + ".operators"]
+    settings = bpy.context.scene.qgp_settings
+    assert [p.bl_label for p in ui.PANELS] == ["Quantized Retopo", "Density", "Features", "Output"]
+    assert all(p.bl_parent_id == "VIEW3D_PT_qgp_retopo" for p in ui.PANELS[1:])
+    reset_scene()
+    bpy.ops.mesh.primitive_cube_add()
+    drawn = []
+    for mode in ("FACES", "EDGE"):
+        settings.target_mode = mode
+        for panel in ui.PANELS:
+            panel.draw(type("Panel", (), {"layout": RecordingLayout(drawn)})(), bpy.context)
+    settings.target_mode = "FACES"
+    names = {p.identifier for p in settings.bl_rna.properties} - {"rna_type", "name"}
+    assert set(drawn) >= names, names - set(drawn)
+    assert {"object.qgp_quad_remesh", "object.qgp_grid_uv"} <= set(drawn)
+    missing = [p.identifier for p in settings.bl_rna.properties if p.identifier in names and not p.description]
+    for operator_class in (operators.OBJECT_OT_qgp_quad_remesh, operators.OBJECT_OT_qgp_grid_uv):
+        redo = []
+        options = RedoOptions(operator_class, RecordingLayout(redo))
+        operator_class.draw(options, bpy.context)
+        own = {p.identifier for p in options.bl_rna.properties} - {"rna_type", "edge_length"}
+        assert set(redo) == own, (operator_class.bl_idname, own ^ set(redo))
+        missing += [f"{operator_class.bl_idname}.{p.identifier}" for p in options.bl_rna.properties
+                    if p.identifier != "rna_type" and not p.description]
+    assert not missing, f"options without a tooltip: {missing}"
+    print(f"panel: {len(ui.PANELS)} panels drew {len(set(drawn))} options and buttons; redo panels complete")
+
+
 def test_select_faces():
     """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
     and vertices; the rest deselected; ids out of range ignored."""
@@ -611,7 +703,7 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
-             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()),
+             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_panel_draws, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),
