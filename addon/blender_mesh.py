@@ -29,8 +29,8 @@ def sharp_edge_flags(mesh):
 
 
 def seam_edge_flags(mesh):
-    """Marked-seam flag per edge: the '.uv_seam' or 'uv_seam' attribute (Blender 4.x, 5.x) or
-    use_seam (3.x)."""
+    """Marked-seam flag per edge: the 'uv_seam' attribute (Blender 4.5, 5.0), '.uv_seam' (earlier
+    4.x) or use_seam (3.x)."""
     return _edge_attribute_flags(mesh, (".uv_seam", "uv_seam"), "use_seam")
 
 
