@@ -59,18 +59,14 @@ class SourceAttributes:
 
 
 def project_onto_source(points, source_mesh):
-    """(source triangle (n,), barycentric weights (n,3)) of the nearest point on the source
-    triangles to each of `points` (object space)."""
+    """(source triangle (n,), barycentric weights (n,3)) of each of `points` (object space): the
+    source triangle nearest to it, and its projection onto that triangle (clamped into it)."""
     tree = BVHTree.FromPolygons(source_mesh.vertices.tolist(), source_mesh.triangles.tolist(), all_triangles=True)
-    triangle = np.zeros(len(points), np.int64)
-    nearest = np.asarray(points, np.float64).copy()
-    for i, point in enumerate(points.tolist()):
-        location, _, index, _ = tree.find_nearest(point)
-        if index is not None:
-            triangle[i] = index
-            nearest[i] = location
+    find_nearest = tree.find_nearest
+    # find_nearest gives no triangle only for an empty tree (every source triangle degenerate).
+    triangle = np.array([find_nearest(point)[2] or 0 for point in points.tolist()], np.int64)
     corners = source_mesh.vertices[source_mesh.triangles[triangle]]
-    return triangle, carry.barycentric_weights(nearest, corners[:, 0], corners[:, 1], corners[:, 2])
+    return triangle, carry.barycentric_weights(points, corners[:, 0], corners[:, 1], corners[:, 2])
 
 
 def _write_attribute(mesh, name, domain, data_type, values):
