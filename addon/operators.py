@@ -218,11 +218,11 @@ def draw_features(layout, data):
     layout.use_property_split = False
     col = layout.column(align=True)
     col.prop(data, "use_marked_sharp")
-    row = col.row(align=True)
-    row.prop(data, "use_sharp_angle")
-    sub = row.row(align=True)
+    col.prop(data, "use_sharp_angle")
+    # Below its checkbox, not beside it: a row of both cuts the label at the sidebar's default width.
+    sub = col.row(align=True)
     sub.active = data.use_sharp_angle
-    sub.prop(data, "sharp_angle", text="")
+    sub.prop(data, "sharp_angle")
     col.prop(data, "use_seams")
     col.prop(data, "use_material_boundaries")
     col.prop(data, "use_face_sets")
