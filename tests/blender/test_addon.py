@@ -83,6 +83,10 @@ def test_broken_inputs(binding):
     bpy.context.view_layer.objects.active = obj
     assert bpy.ops.object.join() == {"FINISHED"}
     assert len(obj.data.polygons) == 64 * 24 + 16, len(obj.data.polygons)
+    # A vertex group with a weight growing along x: the kept triangles get it too (Keep Attributes).
+    group = obj.vertex_groups.new(name="along_x")
+    for v in obj.data.vertices:
+        group.add([v.index], (v.co.x + 10) / 20, "REPLACE")
     before = addon_checks.mesh_data_state(obj)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
@@ -93,7 +97,12 @@ def test_broken_inputs(binding):
     quad = bpy.data.objects[obj.name + "_quads"]
     kept = [p for p in quad.data.polygons if len(p.vertices) == 3]
     assert len(kept) == 16 and all(p.select == (len(p.vertices) == 3) for p in quad.data.polygons), len(kept)
-    print(f"moebius strip beside a torus: kept as 16 triangles, torus quadded: {warning[:100]}")
+    group = quad.vertex_groups["along_x"].index
+    weights = {v.index: sum(g.weight for g in v.groups if g.group == group) for v in quad.data.vertices}
+    error = max(abs(weights[i] - (quad.data.vertices[i].co.x + 10) / 20) for p in kept for i in p.vertices)
+    assert error < 1e-4, error
+    print(f"moebius strip beside a torus: kept as 16 triangles (with their vertex group), torus quadded: "
+          f"{warning[:100]}")
     # Truck: its 54 non-manifold edges are cut into sheets (no refusal at intake); the parts whose
     # holes are narrower than a quad at this density are kept as their triangles, named in a
     # warning; the source is unchanged.
