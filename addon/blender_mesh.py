@@ -138,6 +138,17 @@ def read_mesh(path):
     return new_mesh(os.path.splitext(os.path.basename(path))[0], vertices.tolist(), faces)
 
 
+def _placed_like(context, source, obj):
+    """Gives obj the source's parent and transform and links it to the source's collections."""
+    obj.parent = source.parent
+    obj.matrix_parent_inverse = source.matrix_parent_inverse.copy()
+    obj.matrix_basis = source.matrix_basis.copy()
+    collections = source.users_collection or (context.scene.collection,)
+    for collection in collections:
+        collection.objects.link(obj)
+    return obj
+
+
 def _object_like(context, source, name, vertices, faces, face_triangle, source_mesh, loop_uv=None,
                  layer_name=None):
     """New object `name` with the source's transform, parent, collections and materials; each face
@@ -155,13 +166,7 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
         layer.data.foreach_set("uv", loop_uv.astype(np.float32).reshape(-1))
         mesh.uv_layers.active = layer
     mesh.validate(clean_customdata=False)
-    obj = bpy.data.objects.new(name, mesh)
-    obj.parent = source.parent
-    obj.matrix_parent_inverse = source.matrix_parent_inverse.copy()
-    obj.matrix_basis = source.matrix_basis.copy()
-    collections = source.users_collection or (context.scene.collection,)
-    for collection in collections:
-        collection.objects.link(obj)
+    obj = _placed_like(context, source, bpy.data.objects.new(name, mesh))
     for other in context.selected_objects:
         other.select_set(False)
     obj.select_set(True)
@@ -182,6 +187,18 @@ def create_quad_object(context, source, vertices, quads, quad_triangle, source_m
     faces = [face for block in blocks for face in block.tolist()]
     obj = _object_like(context, source, source.name + "_quads", vertices, faces, quad_triangle, source_mesh)
     attributes.keep_source_attributes(obj, vertices, blocks, quad_triangle, source_mesh)
+    return obj
+
+
+def create_layout_object(context, source, points, segments):
+    """New object '<source>_layout': the quad layout's lines (points (n,3), segments (s,2)) as a
+    mesh of edges only, with the source's transform, parent and collections, drawn in front. It is
+    not selected."""
+    mesh = bpy.data.meshes.new(source.name + "_layout")
+    mesh.from_pydata(points.tolist(), segments.tolist(), [])
+    mesh.validate(clean_customdata=False)
+    obj = _placed_like(context, source, bpy.data.objects.new(source.name + "_layout", mesh))
+    obj.show_in_front = True
     return obj
 
 

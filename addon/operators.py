@@ -199,6 +199,8 @@ DESCRIPTIONS = {
                        "attributes, taken from the nearest point on the source (materials are always kept)",
     "keep_source_uvs": "Give the quads the source's active UV map, taken from the nearest point on the "
                        "source for each face corner (stretched where a quad crosses a UV seam)",
+    "show_layout": "Also make an object '<name>_layout' with the quad layout's lines (the patches the quads "
+                   "are laid out in), drawn in front",
     "quads_per_unit": "Grid cells per UV unit: a texture of this period tiles without visible seams",
     "mark_seams": "Mark the map's cuts (the UV islands' boundaries) as seams, on the mesh or on its "
                   "Flip-Free Copy",
@@ -236,6 +238,7 @@ def draw_quad_output(layout, data):
     col.prop(data, "keep_source_visible")
     col.prop(data, "keep_attributes")
     col.prop(data, "keep_source_uvs")
+    col.prop(data, "show_layout")
 
 
 def draw_uv_output(layout, data):
@@ -351,6 +354,7 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
                                             description=DESCRIPTIONS["keep_attributes"])
     keep_source_uvs: bpy.props.BoolProperty(name="Keep Source UVs", default=False,
                                             description=DESCRIPTIONS["keep_source_uvs"])
+    show_layout: bpy.props.BoolProperty(name="Show Layout", default=False, description=DESCRIPTIONS["show_layout"])
 
     def _kept_of_source(self):
         return self.keep_attributes, self.keep_source_uvs
@@ -359,6 +363,8 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         vertices, quads, quad_triangle = self._session.quad_mesh()
         kept_vertices, kept, kept_triangle, _ = self._session.kept_triangles()
         report = self._session.report()
+        if self.show_layout:
+            self._make_layout_object(context)
         obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source,
                                               kept=(kept_vertices, kept, kept_triangle))
         obj["qgp"] = _report_figures(report, self, self._started, **_quad_figures(report))
@@ -380,6 +386,15 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         else:
             self.report({"INFO"}, message)
         return {"FINISHED"}
+
+    def _make_layout_object(self, context):
+        """The layout's lines as '<name>_layout'; a layout the library cannot give is a warning."""
+        try:
+            points, segments = self._session.layout_lines()
+        except binding.QGPError as e:
+            self.report({"WARNING"}, f"No layout to show: {e.message}")
+            return
+        blender_mesh.create_layout_object(context, self._source_obj, points, segments)
 
     def draw(self, context):
         self._draw_target(self.layout)

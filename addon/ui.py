@@ -31,6 +31,7 @@ class QGP_Settings(bpy.types.PropertyGroup):
     keep_source_visible: _flag("keep_source_visible", "Keep Source Visible", False)
     keep_attributes: _flag("keep_attributes", "Keep Attributes", True)
     keep_source_uvs: _flag("keep_source_uvs", "Keep Source UVs", False)
+    show_layout: _flag("show_layout", "Show Layout", False)
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description=DESCRIPTIONS["quads_per_unit"])
     mark_seams: _flag("mark_seams", "Mark Seams", False)
@@ -39,7 +40,7 @@ class QGP_Settings(bpy.types.PropertyGroup):
 # The settings both operators take, and those of each one's output.
 _SHARED = ("target_mode", "target_faces", "edge_length", "use_marked_sharp", "use_sharp_angle", "sharp_angle",
            "use_seams", "use_material_boundaries", "use_face_sets", "weld")
-_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs")
+_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout")
 _UV_OUTPUT = ("quads_per_unit", "mark_seams")
 
 

@@ -391,6 +391,37 @@ def test_attributes_kept():
     print("Keep Attributes off: materials only")
 
 
+def test_show_layout():
+    """Show Layout (off by default): beside the quads, an object '<name>_layout' of edges only with
+    the source's transform: exactly the native session's layout lines (the T-mesh, traced on the
+    seamless map before quantization, so its lines need not run along quad edges), every point on
+    the source surface; the quad object stays the active one."""
+    from mathutils.bvhtree import BVHTree
+    operators = sys.modules[MODULE + ".operators"]
+    assert bpy.ops.object.qgp_quad_remesh.get_rna_type().properties["show_layout"].default is False
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=48, minor_segments=16)
+    torus = bpy.context.active_object
+    torus.location = (0.5, 0.0, 1.0)
+    bpy.context.view_layer.update()
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300, show_layout=True) == {"FINISHED"}
+    quad, layout = bpy.data.objects[torus.name + "_quads"], bpy.data.objects[torus.name + "_layout"]
+    assert bpy.context.active_object == quad and not layout.select_get()
+    assert layout.matrix_world == torus.matrix_world and layout.show_in_front
+    mesh = layout.data
+    points, segments = operators._session_cache[torus.name][1].layout_lines()
+    assert len(mesh.polygons) == 0 and len(mesh.edges) == len(segments) > 100, (len(mesh.edges), len(segments))
+    assert len(mesh.vertices) == len(points)
+    assert {tuple(sorted(e.vertices)) for e in mesh.edges} == {tuple(sorted(s)) for s in segments.tolist()}
+    tree = BVHTree.FromObject(torus, bpy.context.evaluated_depsgraph_get())
+    off_surface = max(tree.find_nearest(v.co)[3] for v in mesh.vertices)
+    assert off_surface < 1e-5, off_surface
+    select_only(torus)
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300) == {"FINISHED"}
+    assert bpy.data.objects.get(torus.name + "_layout.001") is None, "a layout without Show Layout"
+    print(f"layout: {len(mesh.edges)} segments, all on the surface (within {off_surface:.1e}); none when off")
+
+
 class RecordingLayout:
     """Stands in for a UILayout when drawing headless (blender -b draws no panel): records every
     property drawn and checks it exists on its data and is drawn without property split (a split
@@ -713,6 +744,7 @@ def main():
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
              (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_panel_draws, ()),
+             (test_show_layout, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),
