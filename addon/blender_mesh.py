@@ -4,25 +4,88 @@ import os
 import bpy
 import numpy as np
 
+from . import attributes
 from .core import binding, meshdata
+
+
+def _edge_attribute_flags(mesh, names, edge_property):
+    """Flag per edge from the first of the boolean edge attributes `names` the mesh has (where
+    Blender 4.x/5.x keeps the flag), else from the MeshEdge property `edge_property` (3.x); all off
+    when neither exists."""
+    flags = np.zeros(len(mesh.edges), bool)
+    for name in names:
+        attribute = mesh.attributes.get(name)
+        if attribute is not None and attribute.domain == "EDGE" and attribute.data_type == "BOOLEAN":
+            attribute.data.foreach_get("value", flags)
+            return flags
+    if len(mesh.edges) and hasattr(mesh.edges[0], edge_property):
+        mesh.edges.foreach_get(edge_property, flags)
+    return flags
 
 
 def sharp_edge_flags(mesh):
     """Marked-sharp flag per edge: the 'sharp_edge' attribute (Blender 4.1+) or use_edge_sharp (3.x)."""
-    flags = np.zeros(len(mesh.edges), bool)
-    attribute = mesh.attributes.get("sharp_edge")
-    if attribute is not None and attribute.domain == "EDGE" and attribute.data_type == "BOOLEAN":
-        attribute.data.foreach_get("value", flags)
-    elif len(mesh.edges) and hasattr(mesh.edges[0], "use_edge_sharp"):
-        mesh.edges.foreach_get("use_edge_sharp", flags)
-    return flags
+    return _edge_attribute_flags(mesh, ("sharp_edge",), "use_edge_sharp")
+
+
+def seam_edge_flags(mesh):
+    """Marked-seam flag per edge: the 'uv_seam' attribute (Blender 4.5, 5.0), '.uv_seam' (earlier
+    4.x) or use_seam (3.x)."""
+    return _edge_attribute_flags(mesh, (".uv_seam", "uv_seam"), "use_seam")
+
+
+def _polygon_boundary_flags(mesh, polygon_value):
+    """Flag per edge: set between polygons of different `polygon_value` (one int per polygon)."""
+    loop_start = np.empty(len(mesh.polygons), np.int32)
+    loop_total = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", loop_start)
+    mesh.polygons.foreach_get("loop_total", loop_total)
+    loop_edge = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("edge_index", loop_edge)
+    return meshdata.edges_between_differing_faces(loop_edge, meshdata.loop_polygons(loop_start, loop_total),
+                                                  polygon_value, len(mesh.edges))
+
+
+def material_boundary_flags(mesh):
+    """Flag per edge: set between polygons of different materials."""
+    materials = np.zeros(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("material_index", materials)
+    return _polygon_boundary_flags(mesh, materials)
+
+
+def face_set_boundary_flags(mesh):
+    """Flag per edge: set between different sculpt face sets (the int face attribute
+    '.sculpt_face_set', Blender 4.x/5.x, or 'sculpt_face_set'); all off without face sets."""
+    for name in (".sculpt_face_set", "sculpt_face_set"):
+        attribute = mesh.attributes.get(name)
+        if attribute is not None and attribute.domain == "FACE" and attribute.data_type == "INT":
+            face_sets = np.zeros(len(mesh.polygons), np.int32)
+            attribute.data.foreach_get("value", face_sets)
+            return _polygon_boundary_flags(mesh, face_sets)
+    return np.zeros(len(mesh.edges), bool)
+
+
+# The guides an operator can keep as quad edges besides marked-sharp edges: name -> edge flags.
+GUIDES = {"SEAM": seam_edge_flags, "MATERIAL": material_boundary_flags, "FACE_SET": face_set_boundary_flags}
+
+
+def feature_edges(mesh, use_marked_sharp, guides=()):
+    """Vertex pairs (k,2) int32 of the edges kept as quad edges: marked sharp (with
+    use_marked_sharp) and those of the `guides` (names of GUIDES)."""
+    flags = sharp_edge_flags(mesh) if use_marked_sharp else np.zeros(len(mesh.edges), bool)
+    for guide in guides:
+        flags |= GUIDES[guide](mesh)
+    return meshdata.edge_vertex_pairs(mesh, flags)
 
 
 class SourceMesh:
     """Arrays of a mesh object for the native library: vertices (object space), triangles, the
-    loop of every triangle corner, the polygon of every triangle, and marked-sharp edges."""
+    loop of every triangle corner, the polygon of every triangle, and the feature edges (marked
+    sharp, and the `guides`: see feature_edges). With keep_attributes, also the attributes carried
+    over to the quads (attributes.SourceAttributes; with keep_uvs, the active UV map too)."""
 
-    def __init__(self, context, obj, evaluated, use_marked_sharp):
+    def __init__(self, context, obj, evaluated, use_marked_sharp, guides=(), keep_attributes=False,
+                 keep_uvs=False):
         if evaluated:
             evaluated_obj = obj.evaluated_get(context.evaluated_depsgraph_get())
             mesh = evaluated_obj.to_mesh()
@@ -37,14 +100,16 @@ class SourceMesh:
             mesh.polygons.foreach_get("material_index", materials)
             self.polygon_material = materials
             self.num_loops = len(mesh.loops)
-            self.features = (meshdata.edge_vertex_pairs(mesh, sharp_edge_flags(mesh)) if use_marked_sharp
-                             else np.zeros((0, 2), np.int32))
+            self.features = feature_edges(mesh, use_marked_sharp, guides)
+            self.attributes = (attributes.SourceAttributes(obj, mesh, keep_attributes, keep_uvs)
+                               if keep_attributes or keep_uvs else None)
         finally:
             if evaluated_obj is not None:
                 evaluated_obj.to_mesh_clear()
 
     def fingerprint(self):
-        """Identifies the geometry, so a cached native session is reused only for the same mesh."""
+        """Identifies the geometry and its feature edges, so a cached native session is reused only
+        for the same mesh and features."""
         return hash((self.vertices.tobytes(), self.triangles.tobytes(), self.features.tobytes()))
 
 
@@ -73,6 +138,17 @@ def read_mesh(path):
     return new_mesh(os.path.splitext(os.path.basename(path))[0], vertices.tolist(), faces)
 
 
+def _placed_like(context, source, obj):
+    """Gives obj the source's parent and transform and links it to the source's collections."""
+    obj.parent = source.parent
+    obj.matrix_parent_inverse = source.matrix_parent_inverse.copy()
+    obj.matrix_basis = source.matrix_basis.copy()
+    collections = source.users_collection or (context.scene.collection,)
+    for collection in collections:
+        collection.objects.link(obj)
+    return obj
+
+
 def _object_like(context, source, name, vertices, faces, face_triangle, source_mesh, loop_uv=None,
                  layer_name=None):
     """New object `name` with the source's transform, parent, collections and materials; each face
@@ -90,13 +166,7 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
         layer.data.foreach_set("uv", loop_uv.astype(np.float32).reshape(-1))
         mesh.uv_layers.active = layer
     mesh.validate(clean_customdata=False)
-    obj = bpy.data.objects.new(name, mesh)
-    obj.parent = source.parent
-    obj.matrix_parent_inverse = source.matrix_parent_inverse.copy()
-    obj.matrix_basis = source.matrix_basis.copy()
-    collections = source.users_collection or (context.scene.collection,)
-    for collection in collections:
-        collection.objects.link(obj)
+    obj = _placed_like(context, source, bpy.data.objects.new(name, mesh))
     for other in context.selected_objects:
         other.select_set(False)
     obj.select_set(True)
@@ -105,15 +175,31 @@ def _object_like(context, source, name, vertices, faces, face_triangle, source_m
 
 
 def create_quad_object(context, source, vertices, quads, quad_triangle, source_mesh, kept=None):
-    """New object '<source>_quads' with the source's transform, parent, collections and materials.
-    kept: (vertices, triangles, source triangle per triangle) of parts that could not be quadded,
-    added after the quads as triangles."""
-    faces = quads.tolist()
+    """New object '<source>_quads' with the source's transform, parent, collections and materials,
+    and the attributes source_mesh keeps (see attributes.keep_source_attributes). kept: (vertices,
+    triangles, source triangle per triangle) of parts that could not be quadded, added after the
+    quads as triangles."""
+    blocks = [quads]
     if kept is not None and len(kept[1]):
-        faces += (kept[1] + len(vertices)).tolist()
+        blocks.append(kept[1] + len(vertices))
         vertices = np.concatenate([vertices, kept[0]])
         quad_triangle = np.concatenate([quad_triangle, kept[2]])
-    return _object_like(context, source, source.name + "_quads", vertices, faces, quad_triangle, source_mesh)
+    faces = [face for block in blocks for face in block.tolist()]
+    obj = _object_like(context, source, source.name + "_quads", vertices, faces, quad_triangle, source_mesh)
+    attributes.keep_source_attributes(obj, vertices, blocks, quad_triangle, source_mesh)
+    return obj
+
+
+def create_layout_object(context, source, points, segments):
+    """New object '<source>_layout': the quad layout's lines (points (n,3), segments (s,2)) as a
+    mesh of edges only, with the source's transform, parent and collections, drawn in front. It is
+    not selected."""
+    mesh = bpy.data.meshes.new(source.name + "_layout")
+    mesh.from_pydata(points.tolist(), segments.tolist(), [])
+    mesh.validate(clean_customdata=False)
+    obj = _placed_like(context, source, bpy.data.objects.new(source.name + "_layout", mesh))
+    obj.show_in_front = True
+    return obj
 
 
 def select_faces(mesh, face_ids):

@@ -179,24 +179,103 @@ class _JobOperator:
 _WELD_TOLERANCE = 1e-6  # the native default, relative to the bounding-box diagonal
 
 
+# Tooltips shared by the operators and the panel's settings (ui.py), which pass them on.
+TARGET_MODE_ITEMS = [("FACES", "Quad Count", "Aim for a number of quads"),
+                     ("EDGE", "Edge Length", "Aim for a quad edge length")]
+DESCRIPTIONS = {
+    "target_mode": "Set the density by a number of quads or by a quad edge length",
+    "target_faces": "About how many quads the result has (the exact count follows the layout)",
+    "edge_length": "About how long the quads' edges are, in object units",
+    "use_marked_sharp": "Keep edges marked sharp as quad edges",
+    "use_sharp_angle": "Also keep edges whose faces meet sharper than the angle as quad edges",
+    "sharp_angle": "Edges whose faces meet at more than this angle are kept as quad edges",
+    "use_seams": "Keep edges marked as UV seams as quad edges",
+    "use_material_boundaries": "Keep the edges between faces of different materials as quad edges",
+    "use_face_sets": "Keep the edges between different sculpt face sets as quad edges",
+    "weld": "Join open edges whose vertices coincide (closer than a millionth of the size), as in meshes "
+            "split at UV seams or hard normals; off keeps every loose part apart",
+    "keep_source_visible": "Leave the source object visible; off hides it (its data is never changed)",
+    "keep_attributes": "Give the quads the source's vertex groups, colour and other point and face "
+                       "attributes, taken from the nearest point on the source (materials are always kept)",
+    "keep_source_uvs": "Give the quads the source's active UV map, taken from the nearest point on the "
+                       "source for each face corner (stretched where a quad crosses a UV seam)",
+    "show_layout": "Also make an object '<name>_layout' with the quad layout's lines (the patches the quads "
+                   "are laid out in), drawn in front",
+    "quads_per_unit": "Grid cells per UV unit: a texture of this period tiles without visible seams",
+    "mark_seams": "Mark the map's cuts (the UV islands' boundaries) as seams, on the mesh or on its "
+                  "Flip-Free Copy",
+}
+
+
+def draw_density(layout, data):
+    """The density options of `data` (an operator or the panel's settings): target and its value."""
+    layout.use_property_split = False
+    layout.row().prop(data, "target_mode", expand=True)
+    layout.prop(data, "target_faces" if data.target_mode == "FACES" else "edge_length")
+
+
+def draw_features(layout, data):
+    """The edges kept as quad edges: marked sharp, sharp angle, seams, material and face-set
+    boundaries; and Weld Open Edges."""
+    layout.use_property_split = False
+    col = layout.column(align=True)
+    col.prop(data, "use_marked_sharp")
+    col.prop(data, "use_sharp_angle")
+    # Below its checkbox, not beside it: a row of both cuts the label at the sidebar's default width.
+    sub = col.row(align=True)
+    sub.active = data.use_sharp_angle
+    sub.prop(data, "sharp_angle")
+    col.prop(data, "use_seams")
+    col.prop(data, "use_material_boundaries")
+    col.prop(data, "use_face_sets")
+    layout.prop(data, "weld")
+
+
+def draw_quad_output(layout, data):
+    """The quad object's output options."""
+    layout.use_property_split = False
+    col = layout.column(align=True)
+    col.prop(data, "keep_source_visible")
+    col.prop(data, "keep_attributes")
+    col.prop(data, "keep_source_uvs")
+    col.prop(data, "show_layout")
+
+
+def draw_uv_output(layout, data):
+    """The integer-grid UVs' output options."""
+    layout.use_property_split = False
+    layout.prop(data, "quads_per_unit")
+    layout.prop(data, "mark_seams")
+
+
+def draw_section(layout, title, draw, data):
+    """A box headed `title` with the options `draw` puts in it (draw(layout, data))."""
+    box = layout.box()
+    box.label(text=title)
+    draw(box.column(), data)
+    return box
+
+
 class _TargetProperties:
     """Density and feature options shared by both operators."""
 
-    target_mode: bpy.props.EnumProperty(
-        name="Target", items=[("FACES", "Quad Count", "Aim for a number of quads"),
-                              ("EDGE", "Edge Length", "Aim for a quad edge length")], default="FACES")
-    target_faces: bpy.props.IntProperty(name="Quads", default=2000, min=10, soft_max=100000)
-    edge_length: bpy.props.FloatProperty(name="Edge Length", default=0.1, min=1e-6, subtype="DISTANCE")
-    use_marked_sharp: bpy.props.BoolProperty(name="Marked Sharp Edges", default=True,
-                                             description="Keep edges marked sharp as quad edges")
+    target_mode: bpy.props.EnumProperty(name="Target", items=TARGET_MODE_ITEMS, default="FACES",
+                                        description=DESCRIPTIONS["target_mode"])
+    target_faces: bpy.props.IntProperty(name="Quads", default=2000, min=10, soft_max=100000,
+                                        description=DESCRIPTIONS["target_faces"])
+    edge_length: bpy.props.FloatProperty(name="Edge Length", default=0.1, min=1e-6, subtype="DISTANCE",
+                                         description=DESCRIPTIONS["edge_length"])
+    use_marked_sharp: bpy.props.BoolProperty(name="Marked Sharp", default=True,
+                                             description=DESCRIPTIONS["use_marked_sharp"])
     use_sharp_angle: bpy.props.BoolProperty(name="Sharp Angle", default=False,
-                                            description="Also keep edges sharper than the angle")
+                                            description=DESCRIPTIONS["use_sharp_angle"])
     sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
-                                         subtype="ANGLE")
-    weld: bpy.props.BoolProperty(name="Weld Open Edges", default=True,
-                                 description="Join open edges whose vertices coincide (closer than a millionth "
-                                             "of the size), as in meshes split at UV seams or hard normals; "
-                                             "off keeps every loose part apart")
+                                         subtype="ANGLE", description=DESCRIPTIONS["sharp_angle"])
+    use_seams: bpy.props.BoolProperty(name="Seams", default=False, description=DESCRIPTIONS["use_seams"])
+    use_material_boundaries: bpy.props.BoolProperty(name="Material Boundaries", default=False,
+                                                    description=DESCRIPTIONS["use_material_boundaries"])
+    use_face_sets: bpy.props.BoolProperty(name="Face Sets", default=False, description=DESCRIPTIONS["use_face_sets"])
+    weld: bpy.props.BoolProperty(name="Weld Open Edges", default=True, description=DESCRIPTIONS["weld"])
 
     @classmethod
     def poll(cls, context):
@@ -205,8 +284,10 @@ class _TargetProperties:
     def _prepare(self, context):
         _load_library(context)
         self._source_obj = _active_mesh_object(context)
+        keep_attributes, keep_uvs = self._kept_of_source()
         self._source = blender_mesh.SourceMesh(context, self._source_obj, evaluated=self._use_modifiers,
-                                               use_marked_sharp=self.use_marked_sharp)
+                                               use_marked_sharp=self.use_marked_sharp, guides=self._guides(),
+                                               keep_attributes=keep_attributes, keep_uvs=keep_uvs)
         if len(self._source.triangles) == 0:
             raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
         angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
@@ -224,6 +305,16 @@ class _TargetProperties:
 
     def _wants_fallback_map(self):
         return False
+
+    def _guides(self):
+        """The guides (blender_mesh.GUIDES) kept as quad edges besides marked-sharp edges."""
+        chosen = (("SEAM", self.use_seams), ("MATERIAL", self.use_material_boundaries),
+                  ("FACE_SET", self.use_face_sets))
+        return tuple(name for name, use in chosen if use)
+
+    def _kept_of_source(self):
+        """(attributes, UV map): what the result keeps of the source besides its materials."""
+        return False, False
 
     def execute(self, context):
         try:
@@ -244,16 +335,8 @@ class _TargetProperties:
             return {"CANCELLED"}
 
     def _draw_target(self, layout):
-        layout.use_property_split = True
-        layout.prop(self, "target_mode")
-        layout.prop(self, "target_faces" if self.target_mode == "FACES" else "edge_length")
-        layout.prop(self, "use_marked_sharp")
-        row = layout.row(heading="Sharp Angle")
-        row.prop(self, "use_sharp_angle", text="")
-        sub = row.row()
-        sub.active = self.use_sharp_angle
-        sub.prop(self, "sharp_angle", text="")
-        layout.prop(self, "weld")
+        draw_section(layout, "Density", draw_density, self)
+        draw_section(layout, "Features", draw_features, self)
 
 
 class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Operator):
@@ -265,12 +348,23 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
     _job = binding.JOB_REMESH
     _use_modifiers = True  # the result is a new object: remesh what the user sees
 
-    keep_source_visible: bpy.props.BoolProperty(name="Keep Source Visible", default=False)
+    keep_source_visible: bpy.props.BoolProperty(name="Keep Source Visible", default=False,
+                                                description=DESCRIPTIONS["keep_source_visible"])
+    keep_attributes: bpy.props.BoolProperty(name="Keep Attributes", default=True,
+                                            description=DESCRIPTIONS["keep_attributes"])
+    keep_source_uvs: bpy.props.BoolProperty(name="Keep Source UVs", default=False,
+                                            description=DESCRIPTIONS["keep_source_uvs"])
+    show_layout: bpy.props.BoolProperty(name="Show Layout", default=False, description=DESCRIPTIONS["show_layout"])
+
+    def _kept_of_source(self):
+        return self.keep_attributes, self.keep_source_uvs
 
     def _finish(self, context):
         vertices, quads, quad_triangle = self._session.quad_mesh()
         kept_vertices, kept, kept_triangle, _ = self._session.kept_triangles()
         report = self._session.report()
+        if self.show_layout:
+            self._make_layout_object(context)
         obj = blender_mesh.create_quad_object(context, self._source_obj, vertices, quads, quad_triangle, self._source,
                                               kept=(kept_vertices, kept, kept_triangle))
         obj["qgp"] = _report_figures(report, self, self._started, **_quad_figures(report))
@@ -293,9 +387,18 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
             self.report({"INFO"}, message)
         return {"FINISHED"}
 
+    def _make_layout_object(self, context):
+        """The layout's lines as '<name>_layout'; a layout the library cannot give is a warning."""
+        try:
+            points, segments = self._session.layout_lines()
+        except binding.QGPError as e:
+            self.report({"WARNING"}, f"No layout to show: {e.message}")
+            return
+        blender_mesh.create_layout_object(context, self._source_obj, points, segments)
+
     def draw(self, context):
         self._draw_target(self.layout)
-        self.layout.prop(self, "keep_source_visible")
+        draw_section(self.layout, "Output", draw_quad_output, self)
 
 
 # Two corners of an edge whose UVs differ by less than this share of a grid cell are one UV point
@@ -314,11 +417,8 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
     _use_modifiers = False  # UVs belong to the mesh data's own loops
 
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
-                                            description="Grid cells per UV unit: a texture of this period "
-                                                        "tiles without visible seams")
-    mark_seams: bpy.props.BoolProperty(
-        name="Mark Seams", default=False,
-        description="Mark the map's cuts (the UV islands' boundaries) as seams, on the mesh or on its Flip-Free Copy")
+                                            description=DESCRIPTIONS["quads_per_unit"])
+    mark_seams: bpy.props.BoolProperty(name="Mark Seams", default=False, description=DESCRIPTIONS["mark_seams"])
     flip_free_copy: bpy.props.BoolProperty(
         name="Flip-Free Copy", default=True,
         description="Where the map on the mesh's own triangles would keep flipped triangles, write a new "
@@ -378,9 +478,8 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
 
     def draw(self, context):
         self._draw_target(self.layout)
-        self.layout.prop(self, "quads_per_unit")
-        self.layout.prop(self, "mark_seams")
-        self.layout.prop(self, "flip_free_copy")
+        box = draw_section(self.layout, "Output", draw_uv_output, self)
+        box.prop(self, "flip_free_copy")
 
 
 classes = (OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_grid_uv)

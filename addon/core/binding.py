@@ -116,6 +116,8 @@ def _declare(lib):
         "qgp_result_uv_fetch": (c_int, [vp, p_double, p_int32]),
         "qgp_result_uv_mesh_counts": (c_int, [vp, p_int64, p_int64, p_int32]),
         "qgp_result_uv_mesh_fetch": (c_int, [vp, p_double, p_int32, p_double, p_int32]),
+        "qgp_result_layout_counts": (c_int, [vp, p_int64, p_int64]),
+        "qgp_result_layout_fetch": (c_int, [vp, p_double, p_int32]),
     }
     for name, (restype, argtypes) in sigs.items():
         fn = getattr(lib, name)
@@ -336,6 +338,19 @@ class Session(SessionLifetime):
         self._check(self._lib.qgp_result_uv_fetch(self._handle, _ptr(uv, ctypes.c_double),
                                                   _ptr(cuts, ctypes.c_int32)))
         return uv, cuts
+
+    def layout_lines(self):
+        """The quad layout (T-mesh) of the last remesh or grid-UV job as line segments: (points (n,3)
+        float64 on the surface, segments (s,2) int32 point indices)."""
+        if not hasattr(self._lib, "qgp_result_layout_counts"):
+            raise QGPError(ERR_NOT_READY, "this native library cannot return the quad layout")
+        npoints, nsegments = ctypes.c_int64(), ctypes.c_int64()
+        self._check(self._lib.qgp_result_layout_counts(self._handle, ctypes.byref(npoints), ctypes.byref(nsegments)))
+        points = np.empty((npoints.value, 3), np.float64)
+        segments = np.empty((nsegments.value, 2), np.int32)
+        self._check(self._lib.qgp_result_layout_fetch(self._handle, _ptr(points, ctypes.c_double),
+                                                      _ptr(segments, ctypes.c_int32)))
+        return points, segments
 
     def uv_mesh(self):
         """The integer-grid map as its own triangle mesh: (vertices (n,3) float64, triangles (t,3)

@@ -109,3 +109,29 @@ def uv_seam_edges(mesh, uv_layer, tolerance=0.0):
     flags = np.zeros(len(mesh.edges), bool)
     flags[edge[1:][apart]] = True
     return flags
+
+
+def loop_polygons(loop_start, loop_total):
+    """The polygon of every loop (num_loops,) int32, from each polygon's loop_start and loop_total
+    (each polygon's loops are the block loop_start .. loop_start + loop_total)."""
+    loop_start = np.asarray(loop_start, np.int64)
+    loop_total = np.asarray(loop_total, np.int64)
+    order = np.argsort(loop_start, kind="stable")
+    return np.repeat(order, loop_total[order]).astype(np.int32)
+
+
+def edges_between_differing_faces(loop_edge, loop_polygon, polygon_value, num_edges):
+    """Flag per edge (num_edges bool): set where the polygons around the edge do not all have the
+    same `polygon_value` (a material index, a face set): the boundaries between such regions.
+    Boundary edges (one polygon) are never set; non-manifold edges are set if any two differ."""
+    flags = np.zeros(num_edges, bool)
+    if num_edges == 0 or len(loop_edge) == 0:
+        return flags
+    values = np.asarray(polygon_value, np.int64)[np.asarray(loop_polygon, np.int64)]
+    lowest = np.full(num_edges, np.iinfo(np.int64).max)
+    highest = np.full(num_edges, np.iinfo(np.int64).min)
+    np.minimum.at(lowest, loop_edge, values)
+    np.maximum.at(highest, loop_edge, values)
+    used = np.zeros(num_edges, bool)
+    used[loop_edge] = True
+    return used & (lowest != highest)

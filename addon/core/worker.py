@@ -212,6 +212,9 @@ class WorkerSession(binding.SessionLifetime):
     def uv_mesh(self):
         return self._call("uv_mesh")
 
+    def layout_lines(self):
+        return self._call("layout_lines")
+
 
 def serve(fd):
     """The child's loop: one session, requests until "close" or the parent goes away."""

@@ -24,6 +24,7 @@
 #include "core/json.h"
 #include "intake/read_mesh_file.h"
 #include "mesh_writers.h"
+#include "pipeline/layout_lines.h"
 #include "pipeline/session.h"
 #include "pipeline/uv_mesh.h"
 #include "tmesh/tmesh_system.h"
@@ -214,17 +215,7 @@ void write_uv_output(const std::string& path, const qgp::Session& session, qgp::
 }
 
 // --layout-out: the T-mesh (motorcycle graph) of every component (but those kept as triangles) as
-// OBJ polylines.
-bool has_layout(const qgp::Session& session) {
-  bool complete = false;
-  for (const auto& c : session.components()) {
-    if (c.failure) continue;
-    if (!c.seamless_is_current() || !c.traced.computed_from(c.seamless.id())) return false;
-    complete = true;
-  }
-  return complete;
-}
-
+// OBJ polylines (when qgp::has_layout).
 void write_layout_output(const std::string& path, const qgp::Session& session) {
   std::vector<const qgp::TriMesh*> meshes;
   std::vector<const qgp::TMesh*> tmeshes;
@@ -258,7 +249,7 @@ bool write_optional_outputs(const CommandLine& cl, const qgp::Session* session, 
   qgp::UvMapKind map = qgp::UvMapKind::Seamless;
   const bool has_map = session && qgp::available_uv_map(*session, &map);
   attempt(cl.uv_out, "parametrization", has_map, [&] { write_uv_output(cl.uv_out, *session, map); });
-  attempt(cl.layout_out, "T-mesh layout", session && has_layout(*session),
+  attempt(cl.layout_out, "T-mesh layout", session && qgp::has_layout(*session),
           [&] { write_layout_output(cl.layout_out, *session); });
   return ok;
 }

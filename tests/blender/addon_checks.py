@@ -296,3 +296,158 @@ def argument(args, name, default):
 
 def script_arguments():
     return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+
+
+# Guides and attributes: a UV sphere (32 x 16) with one ring of edges, at the fifth ring from the
+# top, as the curve a guide marks; the faces above it are the other region.
+GUIDE_RING = 5
+
+
+def guide_sphere(guide):
+    """A UV sphere whose ring GUIDE_RING is marked as `guide`: 'SEAM' (seams), 'MATERIAL' (two
+    materials, the faces above the ring the second one) or 'FACE_SET' (two face sets: the int face
+    attribute '.sculpt_face_set', or 'sculpt_face_set' before Blender 3.5). Returns (object, the
+    ring's edges as vertex pairs)."""
+    import bmesh
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=1.0)
+    obj = bpy.context.active_object
+    mesh = obj.data
+    height = math.cos(math.pi * GUIDE_RING / 16)
+    ring = {tuple(sorted(e.vertices)) for e in mesh.edges
+            if all(abs(mesh.vertices[v].co.z - height) < 1e-4 for v in e.vertices)}
+    assert len(ring) == 32, len(ring)
+    above = [int(p.center.z > height) for p in mesh.polygons]
+    if guide == "SEAM":
+        bm = bmesh.new()
+        bm.from_mesh(mesh)
+        for edge in bm.edges:
+            edge.seam = tuple(sorted(v.index for v in edge.verts)) in ring
+        bm.to_mesh(mesh)
+        bm.free()
+    elif guide == "MATERIAL":
+        for name in ("qgp_below", "qgp_above"):
+            mesh.materials.append(bpy.data.materials.get(name) or bpy.data.materials.new(name))
+        mesh.polygons.foreach_set("material_index", above)
+    else:
+        name = ".sculpt_face_set" if bpy.app.version >= (3, 5, 0) else "sculpt_face_set"
+        mesh.attributes.new(name, "INT", "FACE").data.foreach_set("value", [a + 1 for a in above])
+    mesh.update()
+    return obj, ring
+
+
+def _segment_distances(points, starts, ends):
+    """Distance of each point to the nearest of the segments (starts[i], ends[i])."""
+    import numpy as np
+    d = ends - starts
+    t = np.einsum("pk,sk->ps", points, d) - np.einsum("sk,sk->s", starts, d)[None, :]
+    t = np.clip(t / np.maximum(np.einsum("sk,sk->s", d, d), 1e-30)[None, :], 0.0, 1.0)
+    nearest = starts[None, :, :] + t[:, :, None] * d[None, :, :]
+    return np.linalg.norm(points[:, None, :] - nearest, axis=2).min(axis=1)
+
+
+def guide_distance(source, quad, ring):
+    """How far the quads' edges are from the guide `ring` (source edges as vertex pairs): the largest
+    distance of a ring edge's midpoint to the nearest quad edge, in units of the mean quad edge
+    length (both meshes in the same object space)."""
+    import numpy as np
+    sv = np.array([v.co[:] for v in source.data.vertices])
+    qv = np.array([v.co[:] for v in quad.data.vertices])
+    edges = np.array([e.vertices[:] for e in quad.data.edges])
+    starts, ends = qv[edges[:, 0]], qv[edges[:, 1]]
+    mean_length = np.linalg.norm(ends - starts, axis=1).mean()
+    ring = np.array(sorted(ring))
+    midpoints = 0.5 * (sv[ring[:, 0]] + sv[ring[:, 1]])
+    return float(_segment_distances(midpoints, starts, ends).max() / mean_length)
+
+
+def run_guide(guide, option, target=300):
+    """Quantized Retopo on a guide_sphere marked as `guide`, with the operator option `option` off
+    and then on. On, every ring edge's midpoint lies near a quad edge: within 15 % of the mean quad
+    edge length (a ring marked sharp gives the same quads: their edges are chords of the ring, whose
+    vertices need not be quad vertices); off, some midpoint lies over twice as far (about halfway
+    between quad edges). Returns the two distances (off, on)."""
+    source, ring = guide_sphere(guide)
+    distances = []
+    for use in (False, True):
+        quad = run_quad_remesh(source, target_faces=target, keep_source_visible=True, **{option: use})
+        assert {len(p.vertices) for p in quad.data.polygons} == {4}
+        distances.append(guide_distance(source, quad, ring))
+        bpy.data.objects.remove(quad)
+    assert distances[1] < 0.15 and distances[0] > 2 * distances[1], (guide, distances)
+    return distances
+
+
+ATTRIBUTE_SPLIT = 0.3  # the sphere's faces above this height have the second material
+
+
+def attribute_sphere():
+    """A UV sphere with what a quad object keeps: two materials (the faces above ATTRIBUTE_SPLIT the
+    second), the vertex group 'gradient' (weight (z + 1) / 2), the point colour 'Col' ((position +
+    1) / 2), the corner colour 'Paint' (bytes), the face int 'region' (the material index) and its
+    UV map 'UVMap'."""
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=1.0)
+    obj = bpy.context.active_object
+    mesh = obj.data
+    for name in ("qgp_below", "qgp_above"):
+        mesh.materials.append(bpy.data.materials.get(name) or bpy.data.materials.new(name))
+    region = [int(p.center.z > ATTRIBUTE_SPLIT) for p in mesh.polygons]
+    mesh.polygons.foreach_set("material_index", region)
+    mesh.attributes.new("region", "INT", "FACE").data.foreach_set("value", region)
+    group = obj.vertex_groups.new(name="gradient")
+    for v in mesh.vertices:
+        group.add([v.index], (v.co.z + 1) / 2, "REPLACE")
+    colors = mesh.color_attributes.new("Col", "FLOAT_COLOR", "POINT")
+    colors.data.foreach_set("color", [c for v in mesh.vertices for c in ((v.co.x + 1) / 2, (v.co.y + 1) / 2,
+                                                                         (v.co.z + 1) / 2, 1.0)])
+    mesh.color_attributes.new("Paint", "BYTE_COLOR", "CORNER")
+    mesh.color_attributes.active_color = mesh.color_attributes["Col"]
+    assert "UVMap" in mesh.uv_layers, [layer.name for layer in mesh.uv_layers]
+    mesh.update()
+    return obj
+
+
+def check_attributes_kept(source, quad, keep_uvs):
+    """The quad object made from an attribute_sphere keeps its attributes: materials per face (and
+    the face int 'region' equal to them, both of the source polygon under the quad; the material as
+    the quad's centre height says, away from the split), the vertex group weights and point colours
+    at each vertex close to what the source has there, the corner colour, the active colour, and
+    with keep_uvs the UV map 'UVMap' (per corner, in [0, 1]). Returns the largest weight error."""
+    mesh = quad.data
+    n = len(mesh.vertices)
+    materials = [p.material_index for p in mesh.polygons]
+    region = mesh.attributes["region"]
+    assert (region.domain, region.data_type) == ("FACE", "INT")
+    assert [d.value for d in region.data] == materials
+    edge = sum((mesh.vertices[e.vertices[0]].co - mesh.vertices[e.vertices[1]].co).length
+               for e in mesh.edges) / len(mesh.edges)
+    for p in mesh.polygons:
+        if abs(p.center.z - ATTRIBUTE_SPLIT) > edge:
+            assert p.material_index == int(p.center.z > ATTRIBUTE_SPLIT), (p.index, p.center.z, p.material_index)
+    assert set(materials) == {0, 1}, set(materials)
+    assert [g.name for g in quad.vertex_groups] == ["gradient"], list(quad.vertex_groups)
+    weights = [sum(g.weight for g in v.groups) for v in mesh.vertices]
+    weight_error = max(abs(w - (v.co.z + 1) / 2) for w, v in zip(weights, mesh.vertices))
+    assert weight_error < 0.02, weight_error
+    colors = mesh.color_attributes["Col"]
+    assert (colors.domain, colors.data_type, len(colors.data)) == ("POINT", "FLOAT_COLOR", n)
+    color_error = max(abs(c - (x + 1) / 2) for d, v in zip(colors.data, mesh.vertices)
+                      for c, x in zip(d.color[:3], v.co))
+    assert color_error < 0.02, color_error
+    assert mesh.color_attributes.active_color.name == "Col"
+    paint = mesh.color_attributes["Paint"]
+    assert (paint.domain, paint.data_type, len(paint.data)) == ("CORNER", "BYTE_COLOR", len(mesh.loops))
+    if keep_uvs:
+        assert [layer.name for layer in mesh.uv_layers] == ["UVMap"], list(mesh.uv_layers)
+        uv = [c for d in mesh.uv_layers["UVMap"].data for c in d.uv]
+        assert len(uv) == 2 * len(mesh.loops) and all(-1e-6 <= c <= 1 + 1e-6 for c in uv)
+        assert len({round(c, 3) for c in uv}) > 50, "the UVs are not interpolated"
+    else:
+        assert not mesh.uv_layers, list(mesh.uv_layers)
+    return weight_error
+
+
+def check_attributes_not_kept(quad):
+    """With Keep Attributes off: the materials still, nothing else."""
+    mesh = quad.data
+    assert not quad.vertex_groups and "Col" not in mesh.attributes and "region" not in mesh.attributes
+    assert not mesh.uv_layers and {p.material_index for p in mesh.polygons} == {0, 1}

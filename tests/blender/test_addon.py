@@ -83,6 +83,10 @@ def test_broken_inputs(binding):
     bpy.context.view_layer.objects.active = obj
     assert bpy.ops.object.join() == {"FINISHED"}
     assert len(obj.data.polygons) == 64 * 24 + 16, len(obj.data.polygons)
+    # A vertex group with a weight growing along x: the kept triangles get it too (Keep Attributes).
+    group = obj.vertex_groups.new(name="along_x")
+    for v in obj.data.vertices:
+        group.add([v.index], (v.co.x + 10) / 20, "REPLACE")
     before = addon_checks.mesh_data_state(obj)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
@@ -93,7 +97,12 @@ def test_broken_inputs(binding):
     quad = bpy.data.objects[obj.name + "_quads"]
     kept = [p for p in quad.data.polygons if len(p.vertices) == 3]
     assert len(kept) == 16 and all(p.select == (len(p.vertices) == 3) for p in quad.data.polygons), len(kept)
-    print(f"moebius strip beside a torus: kept as 16 triangles, torus quadded: {warning[:100]}")
+    group = quad.vertex_groups["along_x"].index
+    weights = {v.index: sum(g.weight for g in v.groups if g.group == group) for v in quad.data.vertices}
+    error = max(abs(weights[i] - (quad.data.vertices[i].co.x + 10) / 20) for p in kept for i in p.vertices)
+    assert error < 1e-4, error
+    print(f"moebius strip beside a torus: kept as 16 triangles (with their vertex group), torus quadded: "
+          f"{warning[:100]}")
     # Truck: its 54 non-manifold edges are cut into sheets (no refusal at intake); the parts whose
     # holes are narrower than a quad at this density are kept as their triangles, named in a
     # warning; the source is unchanged.
@@ -343,6 +352,168 @@ def test_redo_reuses_session():
           f"scale {scales(redo)[0]:.3f}); after a vertex moved: a fresh solve")
 
 
+def test_guides():
+    """Seams, material boundaries and face sets as guides (each an operator option, off by default):
+    a ring of a UV sphere marked each way becomes a curve of quad edges with its option on; the
+    option changes the features, so it re-solves instead of reusing the cached session."""
+    operators = sys.modules[MODULE + ".operators"]
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    for guide, option in (("SEAM", "use_seams"), ("MATERIAL", "use_material_boundaries"),
+                          ("FACE_SET", "use_face_sets")):
+        assert properties[option].default is False, option
+        reset_scene()
+        off, on = addon_checks.run_guide(guide, option)
+        print(f"guide {guide}: ring edges within {on:.3f} (on) / {off:.3f} (off) quad edge lengths of a quad edge")
+    source = bpy.data.objects[0]
+    session = operators._session_cache[source.name][1]
+    select_only(source)
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300, use_face_sets=False) == {"FINISHED"}
+    assert operators._session_cache[source.name][1] is not session, "a changed guide reused the session"
+
+
+def test_attributes_kept():
+    """Keep Attributes (on by default) and Keep Source UVs (off by default): the quad object gets the
+    source's vertex groups, colour and face attributes, and with Keep Source UVs its UV map; with
+    both off only its materials. The source is unchanged."""
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    assert properties["keep_attributes"].default is True and properties["keep_source_uvs"].default is False
+    reset_scene()
+    source = addon_checks.attribute_sphere()
+    before = addon_checks.mesh_data_state(source)
+    for keep_uvs in (False, True):
+        quad = run_quad_remesh(source, target_faces=300, keep_source_visible=True, keep_source_uvs=keep_uvs)
+        error = addon_checks.check_attributes_kept(source, quad, keep_uvs)
+        print(f"attributes kept on {len(quad.data.polygons)} quads (UV map: {keep_uvs}): weights within {error:.4f}")
+        bpy.data.objects.remove(quad)
+    quad = run_quad_remesh(source, target_faces=300, keep_attributes=False)
+    addon_checks.check_attributes_not_kept(quad)
+    assert addon_checks.mesh_data_state(source) == before, "the source changed"
+    print("Keep Attributes off: materials only")
+
+
+def test_show_layout():
+    """Show Layout (off by default): beside the quads, an object '<name>_layout' of edges only with
+    the source's transform: exactly the native session's layout lines (the T-mesh, traced on the
+    seamless map before quantization, so its lines need not run along quad edges), every point on
+    the source surface; the quad object stays the active one."""
+    from mathutils.bvhtree import BVHTree
+    operators = sys.modules[MODULE + ".operators"]
+    assert bpy.ops.object.qgp_quad_remesh.get_rna_type().properties["show_layout"].default is False
+    reset_scene()
+    bpy.ops.mesh.primitive_torus_add(major_segments=48, minor_segments=16)
+    torus = bpy.context.active_object
+    torus.location = (0.5, 0.0, 1.0)
+    bpy.context.view_layer.update()
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300, show_layout=True) == {"FINISHED"}
+    quad, layout = bpy.data.objects[torus.name + "_quads"], bpy.data.objects[torus.name + "_layout"]
+    assert bpy.context.active_object == quad and not layout.select_get()
+    assert layout.matrix_world == torus.matrix_world and layout.show_in_front
+    mesh = layout.data
+    points, segments = operators._session_cache[torus.name][1].layout_lines()
+    assert len(mesh.polygons) == 0 and len(mesh.edges) == len(segments) > 100, (len(mesh.edges), len(segments))
+    assert len(mesh.vertices) == len(points)
+    assert {tuple(sorted(e.vertices)) for e in mesh.edges} == {tuple(sorted(s)) for s in segments.tolist()}
+    tree = BVHTree.FromObject(torus, bpy.context.evaluated_depsgraph_get())
+    off_surface = max(tree.find_nearest(v.co)[3] for v in mesh.vertices)
+    assert off_surface < 1e-5, off_surface
+    select_only(torus)
+    assert bpy.ops.object.qgp_quad_remesh(target_faces=300) == {"FINISHED"}
+    assert bpy.data.objects.get(torus.name + "_layout.001") is None, "a layout without Show Layout"
+    print(f"layout: {len(mesh.edges)} segments, all on the surface (within {off_surface:.1e}); none when off")
+
+
+class RecordingLayout:
+    """Stands in for a UILayout when drawing headless (blender -b draws no panel): records every
+    property drawn and checks it exists on its data and is drawn without property split (a split
+    cuts long labels at the sidebar's default width); operator buttons check the options set on
+    them against the operator's properties."""
+
+    def __init__(self, drawn, parent=None):
+        self.drawn, self.parent = drawn, parent
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.active = True
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.drawn, self)
+
+    column = row = box = split = _child
+
+    def _split(self):
+        return self.use_property_split or (self.parent is not None and self.parent._split())
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, (data, name)
+        assert not self._split(), f"{name} drawn with property split"
+        self.drawn.append(name)
+
+    def label(self, text="", **kwargs):
+        assert text, "an empty label"
+
+    def separator(self, **kwargs):
+        pass
+
+    def operator(self, idname, **kwargs):
+        self.drawn.append(idname)
+        category, name = idname.split(".")
+        return OptionsCheck(getattr(getattr(bpy.ops, category), name).get_rna_type().properties)
+
+
+class OptionsCheck:
+    """An operator button's options: only the operator's own properties can be set."""
+
+    def __init__(self, properties):
+        object.__setattr__(self, "properties", properties)
+
+    def __setattr__(self, name, value):
+        assert name in self.properties, f"the operator has no option {name}"
+
+
+class RedoOptions:
+    """An operator's options as its redo panel's draw() sees them: the defaults, and the layout."""
+
+    def __init__(self, operator_class, layout):
+        self.bl_rna = getattr(bpy.ops.object, operator_class.bl_idname.split(".")[1]).get_rna_type()
+        self.layout = layout
+        for prop in self.bl_rna.properties:
+            if prop.identifier != "rna_type":
+                setattr(self, prop.identifier, getattr(prop, "default", None))
+        self._draw_target = lambda layout: operator_class._draw_target(self, layout)
+
+
+def test_panel_draws():
+    """The sidebar panel and its sub-panels (Density, Features, Output) and both operators' redo
+    panels draw every option (each with a tooltip), without property split; the panel's buttons get
+    only options their operator has."""
+    ui = sys.modules[MODULE + ".ui"]
+    operators = sys.modules[MODULE + ".operators"]
+    settings = bpy.context.scene.qgp_settings
+    assert [p.bl_label for p in ui.PANELS] == ["Quantized Retopo", "Density", "Features", "Output"]
+    assert all(p.bl_parent_id == "VIEW3D_PT_qgp_retopo" for p in ui.PANELS[1:])
+    reset_scene()
+    bpy.ops.mesh.primitive_cube_add()
+    drawn = []
+    for mode in ("FACES", "EDGE"):
+        settings.target_mode = mode
+        for panel in ui.PANELS:
+            panel.draw(type("Panel", (), {"layout": RecordingLayout(drawn)})(), bpy.context)
+    settings.target_mode = "FACES"
+    names = {p.identifier for p in settings.bl_rna.properties} - {"rna_type", "name"}
+    assert set(drawn) >= names, names - set(drawn)
+    assert {"object.qgp_quad_remesh", "object.qgp_grid_uv"} <= set(drawn)
+    missing = [p.identifier for p in settings.bl_rna.properties if p.identifier in names and not p.description]
+    for operator_class in (operators.OBJECT_OT_qgp_quad_remesh, operators.OBJECT_OT_qgp_grid_uv):
+        redo = []
+        options = RedoOptions(operator_class, RecordingLayout(redo))
+        operator_class.draw(options, bpy.context)
+        own = {p.identifier for p in options.bl_rna.properties} - {"rna_type", "edge_length"}
+        assert set(redo) == own, (operator_class.bl_idname, own ^ set(redo))
+        missing += [f"{operator_class.bl_idname}.{p.identifier}" for p in options.bl_rna.properties
+                    if p.identifier != "rna_type" and not p.description]
+    assert not missing, f"options without a tooltip: {missing}"
+    print(f"panel: {len(ui.PANELS)} panels drew {len(set(drawn))} options and buttons; redo panels complete")
+
+
 def test_select_faces():
     """The remesh operator's flipped-quad selection: exactly the listed polygons, with their edges
     and vertices; the rest deselected; ids out of range ignored."""
@@ -572,7 +743,8 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
-             (test_redo_reuses_session, ()),
+             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_panel_draws, ()),
+             (test_show_layout, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),

@@ -489,3 +489,44 @@ TEST(CApiMeshes, UvMeshIsRefinedWhereTheGlobalMapStaysFlipped) {
 }
 
 }  // namespace
+
+// The quad layout as line segments: not ready before a job; after a remesh of the torus, the
+// report's T-mesh nodes come first, every T-mesh edge is a path of segments from node to node
+// (2 node ends per edge), and the points lie on the torus (torus.obj: a tube of radius 0.25 around a
+// ring of radius 1 about the y axis; its flat facets lie within 0.01 of the tube).
+TEST(CApiMeshes, LayoutLinesFollowTheTMesh) {
+  qgp_session* s = nullptr;
+  ASSERT_EQ(qgp_session_create_from_file((std::string(QGP_MESH_DIR) + "/torus.obj").c_str(), &s), QGP_OK);
+  int64_t np = -1, ns = -1;
+  EXPECT_EQ(qgp_result_layout_counts(s, &np, &ns), QGP_ERR_NOT_READY);
+  ASSERT_EQ(qgp_session_set_option(s, "target_faces", 500), QGP_OK);
+  ASSERT_EQ(qgp_job_start(s, QGP_JOB_REMESH), QGP_OK);
+  int state = -1;
+  ASSERT_EQ(qgp_job_wait(s, -1, &state), QGP_OK) << qgp_session_error(s);
+  ASSERT_EQ(qgp_result_layout_counts(s, &np, &ns), QGP_OK);
+  const auto tmesh = qgp::Json::parse(report_of(s))["tmesh"];
+  const int64_t nodes = tmesh["nodes"].get<int64_t>(), edges = tmesh["edges"].get<int64_t>();
+  ASSERT_GT(edges, 0);
+  EXPECT_GE(np, nodes);
+  EXPECT_GE(ns, edges);
+  std::vector<double> points(3 * np);
+  std::vector<int32_t> segments(2 * ns);
+  ASSERT_EQ(qgp_result_layout_fetch(s, points.data(), segments.data()), QGP_OK);
+  int64_t node_ends = 0;
+  for (int32_t i : segments) {
+    ASSERT_GE(i, 0);
+    ASSERT_LT(i, np);
+    node_ends += i < nodes;
+  }
+  EXPECT_EQ(node_ends, 2 * edges);
+  double lowest = 1e300, highest = -1e300;
+  for (int64_t i = 0; i < np; ++i) {
+    const double ring = std::hypot(points[3 * i], points[3 * i + 2]);
+    const double tube = std::hypot(ring - 1.0, points[3 * i + 1]);
+    lowest = std::min(lowest, tube);
+    highest = std::max(highest, tube);
+  }
+  EXPECT_GT(lowest, 0.24) << "a point off the torus";
+  EXPECT_LT(highest, 0.252) << "a point off the torus";
+  qgp_session_free(s);
+}

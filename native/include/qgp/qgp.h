@@ -127,6 +127,13 @@ QGP_API int qgp_result_kept_counts(qgp_session* session, int64_t* num_vertices, 
 QGP_API int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* source_face,
                                   int32_t* component);
 
+/* The quad layout (T-mesh, the motorcycle graph) of the last successful remesh or grid-UV job, as
+ * line segments over points on the surface (what `qgp remesh --layout-out` writes as polylines):
+ * counts, then points (np x 3) and segments (ns x 2 point indices). Parts kept as triangles have
+ * none. QGP_ERR_NOT_READY when the session has no current layout. Any array may be null. */
+QGP_API int qgp_result_layout_counts(qgp_session* session, int64_t* num_points, int64_t* num_segments);
+QGP_API int qgp_result_layout_fetch(qgp_session* session, double* points, int32_t* segments);
+
 /* The integer-grid map of the last successful grid-UV or remesh job, per corner of the input
  * triangles: uv is num_triangles x 3 x 2 (1 unit = 1 quad; a triangle intake removed gets the map of
  * its nearest kept one at its corners; NaN on parts remeshed on a decimated working mesh and on

@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "intake/read_mesh_file.h"
 #include "metrics/polygon_metrics.h"
+#include "pipeline/layout_lines.h"
 #include "pipeline/session.h"
 #include "pipeline/uv_mesh.h"
 
@@ -424,6 +425,30 @@ int qgp_result_kept_fetch(qgp_session* session, double* vertices, int32_t* trian
     const auto& comp = session->session->kept_component();
     if (source_face) std::copy(src.begin(), src.end(), source_face);
     if (component) std::copy(comp.begin(), comp.end(), component);
+    return QGP_OK;
+  });
+}
+
+int qgp_result_layout_counts(qgp_session* session, int64_t* num_points, int64_t* num_segments) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::LayoutLines lines = qgp::compose_layout_lines(*session->session);
+    if (num_points) *num_points = static_cast<int64_t>(lines.points.size());
+    if (num_segments) *num_segments = static_cast<int64_t>(lines.segments.size());
+    return QGP_OK;
+  });
+}
+
+int qgp_result_layout_fetch(qgp_session* session, double* points, int32_t* segments) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require_idle(session);
+    const qgp::LayoutLines lines = qgp::compose_layout_lines(*session->session);
+    if (points)
+      for (const qgp::Vec3& p : lines.points) points = std::copy(p.data(), p.data() + 3, points);
+    if (segments)
+      for (const auto& s : lines.segments) segments = std::copy(s.begin(), s.end(), segments);
     return QGP_OK;
   });
 }

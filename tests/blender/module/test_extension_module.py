@@ -112,6 +112,24 @@ def test_operators(binding):
         print(f"{source.name}: grid UVs on {loops} loops, {seams} seams, transition residual {residual:.2e}")
 
 
+def test_guides_and_attributes():
+    """The APIs that differ from Blender 3.4: seams (the '.uv_seam' attribute), face sets
+    ('.sculpt_face_set') and material boundaries as guides; vertex groups, colour and face
+    attributes and the UV map kept on the quad object (as test_addon.py checks them in 3.4)."""
+    for guide, option in (("SEAM", "use_seams"), ("MATERIAL", "use_material_boundaries"),
+                          ("FACE_SET", "use_face_sets")):
+        reset_scene()
+        off, on = addon_checks.run_guide(guide, option)
+        print(f"guide {guide}: ring edges within {on:.3f} (on) / {off:.3f} (off) quad edge lengths of a quad edge")
+    reset_scene()
+    source = addon_checks.attribute_sphere()
+    before = addon_checks.mesh_data_state(source)
+    quad = run_quad_remesh(source, target_faces=300, keep_source_visible=True, keep_source_uvs=True)
+    error = addon_checks.check_attributes_kept(source, quad, True)
+    assert addon_checks.mesh_data_state(source) == before, "the source changed"
+    print(f"attributes and UV map kept on {len(quad.data.polygons)} quads, weights within {error:.4f}")
+
+
 def test_batch():
     """The installed extension's batch script, run by this interpreter (the module has no Blender
     binary: bpy.app.binary_path is empty): it registers the add-on from its own folder, with the
@@ -145,6 +163,7 @@ def main():
         binding = sys.modules[PACKAGE + ".core.binding"]
         test_registration(binding)
         test_operators(binding)
+        test_guides_and_attributes()
         test_batch()
         bpy.ops.preferences.addon_disable(module=PACKAGE)
         assert not hasattr(bpy.types, "OBJECT_OT_qgp_quad_remesh"), "the add-on did not unregister"
