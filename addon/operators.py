@@ -84,13 +84,16 @@ def _failed_parts(failed, shown=3):
 
 def _quad_figures(report):
     """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
-    has exactly), where each component's quads come from (quad_paths: 'integer-grid map' or
+    has exactly), count_note (why it is more than 5 % off the count asked, or ""), where each
+    component's quads come from (quad_paths: 'integer-grid map' or
     'T-mesh layout (why)', or 'kept as triangles'), how many components used the layout, the parts kept
     as triangles (kept_parts, kept_triangles: added after the quads), and the quality figures."""
     extraction = report.get("extraction", {})
     quad = report.get("quad", {})
     failed = report.get("failed_components", [])
+    count = report.get("quantization", {}).get("count", {})
     return dict(quads_expected=int(report.get("quantization", {}).get("quads_expected", -1)),
+                count_note=str(count.get("note", "")),
                 components=int(report.get("input", {}).get("components", 0)),
                 quad_paths=[str(c.get("path", "")) if c else "kept as triangles"
                             for c in extraction.get("components", [])],
@@ -371,6 +374,9 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         if not self.keep_source_visible:
             self._source_obj.hide_set(True)
         message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
+        warn = bool(obj["qgp"]["count_note"])
+        if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
+            message += f"; {obj['qgp']['count_note']}"
         failed = report.get("failed_components", [])
         if failed:  # the parts kept as triangles are selected, so Edit Mode shows them
             blender_mesh.select_faces(obj.data, list(range(len(quads), len(quads) + len(kept))))
@@ -381,10 +387,9 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         # so Edit Mode shows them; everything else is deselected.
         flipped = blender_mesh.select_faces(obj.data, report.get("quad", {}).get("flipped_quad_ids", []))
         if flipped:
-            self.report({"WARNING"}, f"{message}; {flipped} quad(s) face against the source surface "
-                                     f"(selected in Edit Mode)")
-        else:
-            self.report({"INFO"}, message)
+            message += f"; {flipped} quad(s) face against the source surface (selected in Edit Mode)"
+            warn = True
+        self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
 
     def _make_layout_object(self, context):

@@ -17,7 +17,7 @@ from addon_checks import (check_quad_object, check_sharp_edges_kept, grid_seam_r
                           mark_sharp_edges, reset_scene, run_batch, run_grid_uv, run_quad_remesh, scene_state,
                           seam_edges, select_only, uv_cut_edges)
 import addon_checks  # noqa: E402
-from shapes import moebius_strip, write_obj  # noqa: E402
+from shapes import grid_cube, moebius_strip, write_obj  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ARGS = addon_checks.script_arguments()
@@ -702,6 +702,30 @@ def test_parts_kept_as_triangles(binding):
           f"{warnings[0][:100]}")
 
 
+def test_count_note(binding):
+    """A count the layout cannot give (a cube's six sides at 10 quads: its counts step from 6 to 12):
+    the quads come, the operator warns with the report's note, which the object's figures keep."""
+    reset_scene()
+    path = os.path.join(tempfile.mkdtemp(prefix="qgp_cube_"), "cube.obj")
+    write_obj(path, *grid_cube(6))
+    obj = addon_checks.import_mesh(binding, path)
+    select_only(obj)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):  # bpy.ops writes an operator's reports to sys.stdout
+        result = bpy.ops.object.qgp_quad_remesh(target_faces=10)
+    print(out.getvalue(), end="")
+    assert result == {"FINISHED"}, result
+    figures = bpy.data.objects[obj.name + "_quads"]["qgp"].to_dict()
+    note = figures["count_note"]
+    assert note.startswith("10 quads asked, ") and "steps from" in note, figures
+    warnings = [line for line in out.getvalue().splitlines() if line.startswith("Warning:")]
+    assert any(note in w for w in warnings), warnings
+    obj.hide_set(False)
+    select_only(obj)
+    bpy.ops.object.qgp_quad_remesh(target_faces=2000)  # within 5 %: no note
+    assert not bpy.data.objects[obj.name + "_quads.001"]["qgp"]["count_note"]
+
+
 def test_batch_all_ok():
     """Every input succeeds: exit status 0, every entry ok with its quads, the files written."""
     out = tempfile.mkdtemp(prefix="qgp_batch_")
@@ -748,7 +772,7 @@ def main():
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),
              (test_batch_success, ()), (test_batch_all_ok, ()), (test_batch_unexpected_failure, ()),
-             (test_parts_kept_as_triangles, (binding,))]
+             (test_parts_kept_as_triangles, (binding,)), (test_count_note, (binding,))]
     # --only NAME[,NAME...]: just these tests (while working on them); the suite runs them all.
     only = ARGS[ARGS.index("--only") + 1].split(",") if "--only" in ARGS else None
     assert only is None or {t.__name__ for t, _ in tests} >= set(only), only

@@ -1,6 +1,7 @@
 // One connected component on its way through the pipeline: the component itself and every stage's
 // result, each stored with the key of the inputs it was computed from (pipeline/stage_result.h).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -44,6 +45,8 @@ struct Quantized {
   double nominal_scale = 0;
   int count_rounds = 0;
   int64_t fewest_quads = -1;
+  // When the count jumps over the target between two nearby scales: the counts on either side.
+  std::optional<std::array<int64_t, 2>> count_step;
   // The round baseline's rounded map: it is the integer-grid map of that quantization.
   std::optional<RoundedMap> rounded;
 };

@@ -196,15 +196,20 @@ struct CountSearch {
   CountTrial best;
   double fewer = 0, more = std::numeric_limits<double>::infinity();
   int64_t fewest = std::numeric_limits<int64_t>::max();
+  int64_t below = 0, above = 0;  // the closest counts under and over the target
   int rounds = 0;
   bool tried = false;
 
   bool on_target() const { return std::abs(best.quads - target) <= kCountTolerance * target; }
+  // The count jumps over the target between two scales a thousandth apart (whole rows of quads,
+  // such as a ring around a handle, come and go at once): no scale gives a count in between.
+  bool at_step() const { return fewer > 0 && std::isfinite(more) && more - fewer < 1e-3 * more; }
   void add(const CountTrial& trial) {
     if (!tried || std::abs(trial.quads - target) < std::abs(best.quads - target)) best = trial;
     tried = true;
-    if (trial.quads < target) fewer = std::max(fewer, trial.scale);
-    if (trial.quads > target) more = std::min(more, trial.scale);
+    if (trial.quads < target) fewer = std::max(fewer, trial.scale), below = std::max(below, trial.quads);
+    if (trial.quads > target)
+      more = std::min(more, trial.scale), above = above ? std::min(above, trial.quads) : trial.quads;
     fewest = std::min(fewest, trial.quads);
   }
   // The proportional step from `last`, or the bracket's middle when that step leaves the bracket.
@@ -217,7 +222,7 @@ struct CountSearch {
 
 // Moves the scale from `last` toward the search's target, up to kMaxCountRounds trials.
 void search_count_scale(const TMesh& tmesh, CountTrial last, CountSearch& search, Progress& progress) {
-  for (int trial = 0; trial < kMaxCountRounds && !search.on_target(); ++trial, ++search.rounds) {
+  for (int trial = 0; trial < kMaxCountRounds && !search.on_target() && !search.at_step(); ++trial, ++search.rounds) {
     last = quads_at_scale(tmesh, search.next_scale(last), progress);
     search.add(last);
   }
@@ -234,7 +239,8 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
     const TMesh& tmesh = state.traced->tmesh;
     const CountTrial first = quads_at_scale(tmesh, scale, progress);
     search.add(first);
-    search_count_scale(tmesh, first, search, progress);
+    if (std::abs(first.quads - target_quads) > 2 * kCountTolerance * target_quads)
+      search_count_scale(tmesh, first, search, progress);
     if (search.best.quads > (1 + 2 * kCountTolerance) * target_quads) {
       // Too many quads still: at a vanishing scale the quantizer keeps only the lengths validity
       // needs. When that gives fewer than the target, the search goes on inside the bracket.
@@ -248,6 +254,7 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
     }
   }
   Quantized q = quantize_without_folds(state, search.best.scale, progress);
+  if (search.at_step() && !search.on_target()) q.count_step = {search.below, search.above};
   q.target_quads = target_quads;
   q.nominal_scale = scale;
   q.count_rounds = search.rounds;

@@ -42,13 +42,14 @@ Quantized quantize_without_folds(const ComponentState& state, double scale, Prog
 
 // Re-quantizations that move the scale toward a component's share of the quad count asked...
 constexpr int kMaxCountRounds = 8;
-// ...until its count is within this share of the target (so the whole mesh is within +-5 %).
+// ...until its count is within this share of the target (twice it is the +-5 % promised).
 constexpr double kCountTolerance = 0.025;
 
 // The component's greedy quantization for `target_quads` quads (0: no count asked, an edge length
 // was): first at the density's `scale` (its ideal quads are the surface area over the edge length
-// squared, but the T-mesh layout rounds short arcs up, most at coarse densities); while its count
-// is more than kCountTolerance off the target, the scale moves by sqrt(target / count), or to the
+// squared, but the T-mesh layout rounds short arcs up, most at coarse densities), kept when its
+// count is within twice kCountTolerance of the target (the promise: +-5 %). Otherwise, while the
+// count is more than kCountTolerance off the target, the scale moves by sqrt(target / count), or to the
 // middle of the bracket of scales that gave fewer and more quads when that step leaves it, up to
 // kMaxCountRounds times. When the closest count is still more than twice kCountTolerance above the
 // target, the fewest quads the layout allows are measured (a quantization at a vanishing scale keeps

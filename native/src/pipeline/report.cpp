@@ -131,30 +131,41 @@ Json tmesh_report(const std::vector<ComponentState>& components) {
 
 namespace {
 
-// The quad count asked and made: {target, quads, fewest_quads, note}. fewest_quads, with a note,
-// when the quads are more than 5 % off the target: the sum over components of the fewest quads
-// their layout allows where that was measured, else of their quads.
+// The quad count asked and made: {target, quads}, and when they are more than 5 % apart a note
+// saying why, with fewest_quads (the sum over components of the fewest quads their layout allows
+// where that was measured, else of their quads) or, where counts jump over the target, steps_from
+// and steps_to (the totals with each such component on the lower and on the higher side).
 Json count_report(const std::vector<ComponentState>& components) {
   double target = 0;
-  int64_t quads = 0, fewest = 0, singular = 0;
+  int64_t quads = 0, fewest = 0, below = 0, above = 0, singular = 0;
+  bool stepped = false;
   for (const ComponentState& state : components) {
     if (state.failure) continue;
     const Quantized& q = *state.quantization;
     target += q.target_quads;
     quads += q.result.quads_expected;
     fewest += q.fewest_quads >= 0 ? q.fewest_quads : q.result.quads_expected;
+    below += q.count_step ? (*q.count_step)[0] : q.result.quads_expected;
+    above += q.count_step ? (*q.count_step)[1] : q.result.quads_expected;
+    stepped = stepped || q.count_step.has_value();
     for (int index : state.field->vertex_index) singular += index != 0;
   }
   Json count = {{"target", std::lround(target)}, {"quads", quads}};
   if (!(target > 0) || std::abs(quads - target) <= 0.05 * target) return count;
-  count["fewest_quads"] = fewest;
   const std::string asked = std::to_string(std::lround(target)) + " quads asked, " + std::to_string(quads) + " made: ";
-  if (fewest > 1.05 * target)
+  if (fewest > 1.05 * target) {
+    count["fewest_quads"] = fewest;
     count["note"] = asked + std::to_string(fewest) + " is the fewest this layout allows (the cross field's " +
                     std::to_string(singular) + " singular points and the features and boundaries need whole quads " +
                     "between them)";
-  else
+  } else if (stepped) {
+    count["steps_from"] = below;
+    count["steps_to"] = above;
+    count["note"] = asked + "this layout's count steps from " + std::to_string(below) + " to " + std::to_string(above) +
+                    " near the target (whole rows of quads come and go at once)";
+  } else {
     count["note"] = asked + "the quantization found no closer count";
+  }
   return count;
 }
 
@@ -175,6 +186,7 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
     entry["nominal_scale"] = q.nominal_scale;
     entry["count_rounds"] = q.count_rounds;
     if (q.fewest_quads >= 0) entry["fewest_quads"] = q.fewest_quads;
+    if (q.count_step) entry["count_step"] = *q.count_step;
   }
   return {{"method", quantizer_name(quantizer)},
           {"quads_expected", quads},
