@@ -20,7 +20,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
-from shapes import moebius_strip, write_obj  # noqa: E402
+from shapes import grid_cube, moebius_strip, write_obj  # noqa: E402
 
 FAILURES = []
 
@@ -157,21 +157,21 @@ def test_edge_length(qgp, meshes, tmp):
 
 def test_quad_count(qgp, meshes, tmp):
     """--faces: within 5 % of the count asked (bunny.off and fandisk at 40 degrees, 1 000 quads);
-    below the fewest the layout allows (spot at 20), that many quads and a note naming the minimum."""
+    below the fewest the layout allows (a cube asked 3: one quad per side), that many quads and a
+    note naming the minimum."""
     for name, extra in (("bunny.off", []), ("fandisk.obj", ["--sharp-angle", 40])):
         out = os.path.join(tmp, "count.obj")
         proc = run(qgp, "remesh", os.path.join(meshes, name), "-o", out, "--faces", 1000, *extra)
         quads = sum(1 for line in open(out) if line.startswith("f ")) if proc.returncode == 0 else 0
         check(abs(quads - 1000) <= 50 and "note:" not in proc.stdout,
               f"{name} {' '.join(map(str, extra))} --faces 1000: {quads} quads, within 5 %")
-    report = os.path.join(tmp, "count.json")
-    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", os.path.join(tmp, "few.obj"), "--faces", 20,
-               "--report", report)
+    cube, report = os.path.join(tmp, "cube.obj"), os.path.join(tmp, "count.json")
+    write_obj(cube, *grid_cube(6))
+    proc = run(qgp, "remesh", cube, "-o", os.path.join(tmp, "few.obj"), "--faces", 3, "--report", report)
     count = json.load(open(report))["quantization"]["count"] if proc.returncode == 0 else {}
-    fewest = count.get("fewest_quads", 0)
-    check(proc.returncode == 0 and fewest > 21 and count["quads"] >= fewest
-          and f"note: 20 quads asked, {count['quads']} made: {fewest} is the fewest this layout allows" in proc.stdout,
-          f"spot --faces 20: exit 0, the fewest quads named on stdout ({proc.stdout.strip()[-160:]})")
+    check(proc.returncode == 0 and count.get("fewest_quads") == 6 == count["quads"]
+          and "note: 3 quads asked, 6 made: 6 is the fewest this layout allows" in proc.stdout,
+          f"cube --faces 3: exit 0, 6 quads, the fewest named on stdout ({proc.stdout.strip()[-160:]})")
 
 
 def test_features(qgp, meshes, tmp):
