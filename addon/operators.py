@@ -259,8 +259,13 @@ def draw_section(layout, title, draw, data):
     return box
 
 
-class _TargetProperties:
-    """Density and feature options shared by both operators."""
+def flag(name, label, default):
+    """A checkbox option whose tooltip is DESCRIPTIONS[name]."""
+    return bpy.props.BoolProperty(name=label, default=default, description=DESCRIPTIONS[name])
+
+
+class TargetSettings:
+    """The density and feature options: of both operators, and of the panel's settings."""
 
     target_mode: bpy.props.EnumProperty(name="Target", items=TARGET_MODE_ITEMS, default="FACES",
                                         description=DESCRIPTIONS["target_mode"])
@@ -268,17 +273,18 @@ class _TargetProperties:
                                         description=DESCRIPTIONS["target_faces"])
     edge_length: bpy.props.FloatProperty(name="Edge Length", default=0.1, min=1e-6, subtype="DISTANCE",
                                          description=DESCRIPTIONS["edge_length"])
-    use_marked_sharp: bpy.props.BoolProperty(name="Marked Sharp", default=True,
-                                             description=DESCRIPTIONS["use_marked_sharp"])
-    use_sharp_angle: bpy.props.BoolProperty(name="Sharp Angle", default=False,
-                                            description=DESCRIPTIONS["use_sharp_angle"])
+    use_marked_sharp: flag("use_marked_sharp", "Marked Sharp", True)
+    use_sharp_angle: flag("use_sharp_angle", "Sharp Angle", False)
     sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
                                          subtype="ANGLE", description=DESCRIPTIONS["sharp_angle"])
-    use_seams: bpy.props.BoolProperty(name="Seams", default=False, description=DESCRIPTIONS["use_seams"])
-    use_material_boundaries: bpy.props.BoolProperty(name="Material Boundaries", default=False,
-                                                    description=DESCRIPTIONS["use_material_boundaries"])
-    use_face_sets: bpy.props.BoolProperty(name="Face Sets", default=False, description=DESCRIPTIONS["use_face_sets"])
-    weld: bpy.props.BoolProperty(name="Weld Open Edges", default=True, description=DESCRIPTIONS["weld"])
+    use_seams: flag("use_seams", "Seams", False)
+    use_material_boundaries: flag("use_material_boundaries", "Material Boundaries", False)
+    use_face_sets: flag("use_face_sets", "Face Sets", False)
+    weld: flag("weld", "Weld Open Edges", True)
+
+
+class _TargetProperties(TargetSettings):
+    """Density and feature options shared by both operators, and their common run."""
 
     @classmethod
     def poll(cls, context):

@@ -1,45 +1,24 @@
 """Sidebar panel (View3D > Sidebar > Retopo: Density, Features, Output) and Object menu entries."""
-import math
-
 import bpy
 
-from .operators import (DESCRIPTIONS, TARGET_MODE_ITEMS, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_quad_remesh,
-                        draw_density, draw_features, draw_quad_output, draw_uv_output)
+from .operators import (DESCRIPTIONS, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_quad_remesh, TargetSettings,
+                        draw_density, draw_features, draw_quad_output, draw_uv_output, flag)
 
 
-def _flag(name, label, default):
-    return bpy.props.BoolProperty(name=label, default=default, description=DESCRIPTIONS[name])
-
-
-class QGP_Settings(bpy.types.PropertyGroup):
+class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
     """The panel's options, passed to the operators by its buttons."""
 
-    target_mode: bpy.props.EnumProperty(name="Target", items=TARGET_MODE_ITEMS, default="FACES",
-                                        description=DESCRIPTIONS["target_mode"])
-    target_faces: bpy.props.IntProperty(name="Quads", default=2000, min=10, soft_max=100000,
-                                        description=DESCRIPTIONS["target_faces"])
-    edge_length: bpy.props.FloatProperty(name="Edge Length", default=0.1, min=1e-6, subtype="DISTANCE",
-                                         description=DESCRIPTIONS["edge_length"])
-    use_marked_sharp: _flag("use_marked_sharp", "Marked Sharp", True)
-    use_sharp_angle: _flag("use_sharp_angle", "Sharp Angle", False)
-    sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
-                                         subtype="ANGLE", description=DESCRIPTIONS["sharp_angle"])
-    use_seams: _flag("use_seams", "Seams", False)
-    use_material_boundaries: _flag("use_material_boundaries", "Material Boundaries", False)
-    use_face_sets: _flag("use_face_sets", "Face Sets", False)
-    weld: _flag("weld", "Weld Open Edges", True)
-    keep_source_visible: _flag("keep_source_visible", "Keep Source Visible", False)
-    keep_attributes: _flag("keep_attributes", "Keep Attributes", True)
-    keep_source_uvs: _flag("keep_source_uvs", "Keep Source UVs", False)
-    show_layout: _flag("show_layout", "Show Layout", False)
+    keep_source_visible: flag("keep_source_visible", "Keep Source Visible", False)
+    keep_attributes: flag("keep_attributes", "Keep Attributes", True)
+    keep_source_uvs: flag("keep_source_uvs", "Keep Source UVs", False)
+    show_layout: flag("show_layout", "Show Layout", False)
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description=DESCRIPTIONS["quads_per_unit"])
-    mark_seams: _flag("mark_seams", "Mark Seams", False)
+    mark_seams: flag("mark_seams", "Mark Seams", False)
 
 
 # The settings both operators take, and those of each one's output.
-_SHARED = ("target_mode", "target_faces", "edge_length", "use_marked_sharp", "use_sharp_angle", "sharp_angle",
-           "use_seams", "use_material_boundaries", "use_face_sets", "weld")
+_SHARED = tuple(TargetSettings.__annotations__)
 _QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout")
 _UV_OUTPUT = ("quads_per_unit", "mark_seams")
 
