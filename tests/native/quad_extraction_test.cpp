@@ -1115,7 +1115,6 @@ TEST(QuadExtraction, AppendMergesComponents) {
   EXPECT_EQ(all.component.front(), 0);
   EXPECT_EQ(all.component.back(), 1);
   EXPECT_EQ(all.vertex_singular.size(), static_cast<size_t>(all.num_vertices()));
-  EXPECT_EQ(all.quad_face.size(), static_cast<size_t>(all.num_quads()));
   const QuadTopology t = quad_topology(all);
   EXPECT_EQ(t.euler_characteristic, 2 + 0);  // sphere + torus
   EXPECT_EQ(t.non_manifold_edges + t.inconsistent_edges + t.unreferenced_vertices, 0);

@@ -14,7 +14,6 @@ struct QuadMesh {
   std::vector<int> vertex_face;       // #V: working-mesh triangle containing the vertex
   std::vector<char> vertex_singular;  // #V: 1 if the vertex sits on a singularity of the map
                                       //     (valence != 4 inside, != 3 on the boundary)
-  std::vector<int> quad_face;         // #Q: a working-mesh triangle the quad overlaps (at corner 0)
 
   int num_vertices() const { return static_cast<int>(V.rows()); }
   int num_quads() const { return static_cast<int>(Q.rows()); }

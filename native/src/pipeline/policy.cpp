@@ -95,8 +95,6 @@ UntangleStats untangle_on_surface(const ComponentState& state, QuadMesh& quads, 
   UntangleStats stats = untangle_flipped_quads(quads, state.mesh, state.field->feature_edge, progress);
   if (state.full_mesh) {
     project_to_surface(quads, *state.full_mesh, progress);
-    quads.quad_face.resize(quads.num_quads());
-    for (int q = 0; q < quads.num_quads(); ++q) quads.quad_face[q] = quads.vertex_face[quads.Q(q, 0)];
     const UntangleStats projected = untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
     stats.flipped_after = projected.flipped_after;
     stats.moved_vertices += projected.moved_vertices;

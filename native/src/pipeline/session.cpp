@@ -12,8 +12,31 @@
 #include "pipeline/policy.h"
 #include "pipeline/report.h"
 #include "pipeline/split_faces.h"
+#include "quad_extraction/surface_projection.h"
 
 namespace qgp {
+namespace {
+
+// Per quad of `part`, the intake face under its centre: the face of the component's surface (its
+// full mesh when the working mesh is decimated) closest to the mean of its corners; -1 where none
+// is known. A quad's material and face attributes come from that face: the face under a corner
+// (where extraction started the quad) can lie a quad's half-diagonal away, across a material split.
+std::vector<int> intake_faces_under_quad_centres(const QuadMesh& part, const ComponentState& state) {
+  const bool full = state.full_mesh.has_value();
+  const TriMesh& surface = full ? *state.full_mesh : state.mesh;
+  const std::vector<int>& face_map = full ? state.full_face_map : state.face_map;
+  const TriangleBvh bvh(surface);
+  std::vector<int> faces(part.num_quads(), -1);
+  for (int q = 0; q < part.num_quads(); ++q) {
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centre += part.V.row(part.Q(q, k)).transpose();
+    const int f = bvh.closest_point(centre / 4).triangle;
+    if (f >= 0 && f < static_cast<int>(face_map.size())) faces[q] = face_map[f];
+  }
+  return faces;
+}
+
+}  // namespace
 
 Session::Session(PolygonSoup input) : input_(std::move(input)) {}
 Session::~Session() = default;
@@ -394,11 +417,8 @@ void Session::collect_quads(Progress& progress) {
     if (state.failure) continue;
     const QuadMesh& part = state.quads->extraction.quads;
     append_quad_mesh(*quads_, part, static_cast<int>(c));
-    for (int q = 0; q < part.num_quads(); ++q) {
-      const int f = part.quad_face.empty() ? -1 : part.quad_face[q];
-      const std::vector<int>& face_map = state.full_mesh ? state.full_face_map : state.face_map;
-      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[face_map[f]]);
-    }
+    for (const int f : intake_faces_under_quad_centres(part, state))
+      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[f]);
   }
   collect_kept_triangles(failed);
   report_["quad"] = measure_quads(quadded, failed.empty(), progress);

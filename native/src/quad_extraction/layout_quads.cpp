@@ -249,9 +249,6 @@ LayoutQuads LayoutQuadExtractor::run() {
   merge_points();
   build_quad_mesh();
   project_onto_surface();
-  QuadMesh& out = result_.quads;
-  out.quad_face.resize(out.num_quads());
-  for (int q = 0; q < out.num_quads(); ++q) out.quad_face[q] = out.vertex_face[out.Q(q, 0)];
   return std::move(result_);
 }
 

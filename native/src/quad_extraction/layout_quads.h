@@ -33,7 +33,7 @@ struct LayoutQuadsStats {
 };
 
 struct LayoutQuads {
-  QuadMesh quads;              // vertex_face (working-mesh triangle), vertex_singular and quad_face are filled
+  QuadMesh quads;              // vertex_face (working-mesh triangle) and vertex_singular are filled
   std::vector<int> quad_cell;  // #Q: the T-mesh cell each quad belongs to
   LayoutQuadsStats stats;
 };

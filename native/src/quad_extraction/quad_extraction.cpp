@@ -598,7 +598,6 @@ class Extractor {
       for (int r = p.ray_begin; r < p.ray_begin + p.ray_count; ++r) ray_owner[r] = i;
     }
     std::vector<std::array<int, 4>> quads;
-    std::vector<int> quad_face;
     std::vector<char> visited(rays_.size(), 0);
     for (size_t r0 = 0; r0 < rays_.size(); ++r0) {
       if (!rays_[r0].sector_inside) ++s.boundary_edges;
@@ -633,7 +632,6 @@ class Extractor {
       }
       if (closed && corners.size() == 4) {
         quads.push_back({corners[0], corners[1], corners[2], corners[3]});
-        quad_face.push_back(rays_[r0].face);
       } else {
         ++s.non_quad_faces;
         note_defect(std::string(broken || !closed ? "an open face walk"
@@ -644,7 +642,6 @@ class Extractor {
     qm.Q.resize(static_cast<int>(quads.size()), 4);
     for (size_t i = 0; i < quads.size(); ++i)
       for (int k = 0; k < 4; ++k) qm.Q(static_cast<int>(i), k) = quads[i][k];
-    qm.quad_face = std::move(quad_face);
   }
 
   const TriMesh& mesh_;
@@ -677,7 +674,6 @@ void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
   const int nv = into.num_vertices(), nq = into.num_quads();
   const bool had_vertex_data =
       into.vertex_face.size() == static_cast<size_t>(nv) && into.vertex_singular.size() == static_cast<size_t>(nv);
-  const bool had_quad_face = into.quad_face.size() == static_cast<size_t>(nq);
   into.V.conservativeResize(nv + part.num_vertices(), 3);
   into.V.bottomRows(part.num_vertices()) = part.V;
   into.Q.conservativeResize(nq + part.num_quads(), 4);
@@ -691,10 +687,6 @@ void append_quad_mesh(QuadMesh& into, const QuadMesh& part, int component) {
   } else {
     into.vertex_face.clear(), into.vertex_singular.clear();
   }
-  if (had_quad_face && part.quad_face.size() == static_cast<size_t>(part.num_quads()))
-    into.quad_face.insert(into.quad_face.end(), part.quad_face.begin(), part.quad_face.end());
-  else
-    into.quad_face.clear();
 }
 
 void to_json(Json& j, const QuadExtractionStats& s) {

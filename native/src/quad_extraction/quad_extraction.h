@@ -55,7 +55,7 @@ struct QuadExtractionStats {
 };
 
 struct QuadExtraction {
-  QuadMesh quads;  // vertex_face, vertex_singular and quad_face are filled
+  QuadMesh quads;  // vertex_face and vertex_singular are filled
   QuadExtractionStats stats;
 };
 

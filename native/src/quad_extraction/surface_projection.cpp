@@ -143,7 +143,6 @@ void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progre
     quads.V.row(v) = hit.point.transpose();
     quads.vertex_face[v] = hit.triangle;
   }
-  quads.quad_face.clear();
 }
 
 }  // namespace qgp

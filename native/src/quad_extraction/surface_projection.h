@@ -47,7 +47,7 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
 
 // Moves every quad vertex onto its closest point of `target` (the original, finer surface) and
-// sets vertex_face to the target triangle (quad_face is cleared: it referred to the working mesh).
+// sets vertex_face to the target triangle.
 void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progress);
 
 }  // namespace qgp
