@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "quantization/quantization.h"
+#include "symmetry/symmetry.h"
 
 namespace qgp {
 
@@ -23,6 +24,9 @@ struct RemeshOptions {
   // Where the integer-grid map stays flipped, also build the fallback cell map on the mesh with the
   // T-mesh inserted (igm/cell_map; for maps written as files, qgp --uv-out).
   bool fallback_uv_map = false;
+  // Mirror symmetry about the input's coordinate planes (Remesh only): the positive half is remeshed
+  // with target_faces / copies quads, then mirrored and welded (symmetry/symmetry.h).
+  SymmetryAxes symmetry;
 
   static constexpr double kDefaultTargetFaces = 2000;
 };

@@ -30,6 +30,12 @@ constexpr int kMaxWorkingBudgetGrowth = 4;
 constexpr double kMaxSeamlessRescale = 2;
 // Re-quantizations against a folding layout.
 constexpr int kMaxFoldRounds = 8;
+// Symmetry, relative to the bounding-box diagonal: input vertices this close to a plane are moved
+// onto it before the cut (no sliver beside them), and the half's quad boundary vertices this close
+// are welded to their mirror image (extraction puts them on the plane; projection onto a decimated
+// mesh's original may move them off by rounding).
+constexpr double kSymmetrySnapTolerance = 1e-5;
+constexpr double kSymmetryWeldTolerance = 1e-4;
 
 // True when a seamless map solved for `solved_for` serves a run at `edge_length` (rescaled).
 bool seamless_map_serves(double solved_for, double edge_length);

@@ -135,7 +135,7 @@ namespace {
 // saying why, with fewest_quads (the sum over components of the fewest quads their layout allows
 // where that was measured, else of their quads) or, where counts jump over the target, steps_from
 // and steps_to (the totals with each such component on the lower and on the higher side).
-Json count_report(const std::vector<ComponentState>& components) {
+Json count_report(const std::vector<ComponentState>& components, int copies) {
   double target = 0;
   int64_t quads = 0, fewest = 0, below = 0, above = 0, singular = 0;
   bool stepped = false;
@@ -150,14 +150,15 @@ Json count_report(const std::vector<ComponentState>& components) {
     stepped = stepped || q.count_step.has_value();
     for (int index : state.field->vertex_index) singular += index != 0;
   }
+  target *= copies, quads *= copies, fewest *= copies, below *= copies, above *= copies;
   Json count = {{"target", std::lround(target)}, {"quads", quads}};
   if (!(target > 0) || std::abs(quads - target) <= 0.05 * target) return count;
   const std::string asked = std::to_string(std::lround(target)) + " quads asked, " + std::to_string(quads) + " made: ";
   if (fewest > 1.05 * target) {
     count["fewest_quads"] = fewest;
     count["note"] = asked + std::to_string(fewest) + " is the fewest this layout allows (the cross field's " +
-                    std::to_string(singular) + " singular points and the features and boundaries need whole quads " +
-                    "between them)";
+                    std::to_string(singular) + " singular points" + (copies > 1 ? " per mirror copy" : "") +
+                    " and the features and boundaries need whole quads " + "between them)";
   } else if (stepped) {
     count["steps_from"] = below;
     count["steps_to"] = above;
@@ -171,7 +172,7 @@ Json count_report(const std::vector<ComponentState>& components) {
 
 }  // namespace
 
-Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer) {
+Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer, int copies) {
   Json per_component = Json::array();
   int64_t quads = 0;
   for (const ComponentState& state : components) {
@@ -189,8 +190,8 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
     if (q.count_step) entry["count_step"] = *q.count_step;
   }
   return {{"method", quantizer_name(quantizer)},
-          {"quads_expected", quads},
-          {"count", count_report(components)},
+          {"quads_expected", quads * copies},
+          {"count", count_report(components, copies)},
           {"components", std::move(per_component)}};
 }
 

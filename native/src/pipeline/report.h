@@ -15,7 +15,8 @@ Json working_mesh_report(const std::vector<ComponentState>& components);
 Json field_report(const std::vector<ComponentState>& components);
 Json seamless_report(const std::vector<ComponentState>& components, double edge_length);
 Json tmesh_report(const std::vector<ComponentState>& components);
-Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer);
+// copies: the mirror copies the quads are made into (symmetry), which multiply the counts.
+Json quantization_report(const std::vector<ComponentState>& components, Quantizer quantizer, int copies = 1);
 Json igm_report(const std::vector<ComponentState>& components);
 // The `extraction` object; marks `igm` as having used a fallback where quads came from the layout.
 Json extraction_report(const std::vector<ComponentState>& components, Json& igm);

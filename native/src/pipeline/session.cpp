@@ -54,15 +54,45 @@ void Session::set_options(const RemeshOptions& options) {
     if (e[0] < 0 || e[1] < 0 || e[0] >= input_.num_vertices() || e[1] >= input_.num_vertices() || e[0] == e[1])
       throw Error(ErrorCode::InvalidArgument, "feature edge (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
                                                   ") is not a pair of distinct vertices of the mesh");
+  const bool half_changed = options.symmetry != options_.symmetry || options.feature_edges != options_.feature_edges;
+  std::unique_ptr<HalfSoup> half = half_changed ? cut_half(options) : nullptr;
   if (options.drop_bad_components != options_.drop_bad_components ||
       options.weld_tolerance != options_.weld_tolerance ||
-      options.refuse_non_manifold != options_.refuse_non_manifold) {
+      options.refuse_non_manifold != options_.refuse_non_manifold || options.symmetry != options_.symmetry) {
     intake_.reset();
     components_.clear();
   }
   if (options.feature_edges != options_.feature_edges || options.sharp_angle_deg != options_.sharp_angle_deg)
     components_.clear();
+  if (half_changed) half_ = std::move(half);
   options_ = options;
+}
+
+std::unique_ptr<HalfSoup> Session::cut_half(const RemeshOptions& options) const {
+  if (!options.symmetry.any()) return nullptr;
+  Eigen::AlignedBox3d box;
+  for (const Vec3& p : input_.positions) box.extend(p);
+  const double snap = input_.positions.empty() ? 0.0 : kSymmetrySnapTolerance * box.diagonal().norm();
+  auto half = std::make_unique<HalfSoup>(cut_to_positive_half(input_, options.feature_edges, options.symmetry, snap));
+  if (half->soup.num_faces() == 0 && input_.num_faces() > 0) {
+    std::string planes;
+    for (char axis : options.symmetry.name()) planes += std::string(planes.empty() ? "" : ", ") + axis + " = 0";
+    throw Error(ErrorCode::InvalidArgument,
+                "symmetry " + options.symmetry.name() + ": no face of the mesh is on the positive side of " + planes +
+                    "; the planes are the object's own (its origin and axes): move the origin onto the symmetry "
+                    "plane, or mirror about another axis");
+  }
+  return half;
+}
+
+int Session::input_face_of(int intake_face) const {
+  const int f = intake_->input_face[intake_face];
+  return half_ ? half_->input_face[f] : f;
+}
+
+double Session::asked_quads() const {
+  const double faces = options_.target_faces > 0 ? options_.target_faces : RemeshOptions::kDefaultTargetFaces;
+  return faces / options_.symmetry.copies();
 }
 
 void Session::run(Job job, Progress& progress) {
@@ -79,6 +109,9 @@ void Session::run(Job job, Progress& progress) {
   report_["error"] = nullptr;
   report_["timings_s"] = Json::object();
   try {
+    if (job == Job::GridUV && half_)
+      throw Error(ErrorCode::InvalidArgument,
+                  "symmetry applies to quad remeshing: integer-grid UVs are made on the whole input's triangles");
     run_intake_stage(progress);
     if (job != Job::Intake) run_remesh_stages(job, progress);
     report_["timings_s"]["total"] = total.seconds();
@@ -110,7 +143,7 @@ void Session::run_intake_stage(Progress& progress) {
     intake_options.drop_bad_components = options_.drop_bad_components;
     intake_options.refuse_non_manifold = options_.refuse_non_manifold;
     intake_options.weld_tolerance = options_.weld_tolerance;
-    intake_ = std::make_unique<IntakeResult>(run_intake(input_, intake_options, progress));
+    intake_ = std::make_unique<IntakeResult>(run_intake(intake_input(), intake_options, progress));
   }
   report_["input"] = *intake_;
   report_["timings_s"]["intake"] = timer.seconds();
@@ -118,7 +151,7 @@ void Session::run_intake_stage(Progress& progress) {
 
 double Session::target_edge_length() const {
   if (options_.edge_length > 0) return options_.edge_length;
-  const double faces = options_.target_faces > 0 ? options_.target_faces : RemeshOptions::kDefaultTargetFaces;
+  const double faces = asked_quads();
   double area = 0;
   const TriMesh& m = intake_->mesh;
   for (int f = 0; f < m.num_faces(); ++f) area += 0.5 * m.face_normal_unnormalized(f).norm();
@@ -140,7 +173,7 @@ std::vector<double> Session::component_quad_targets() const {
   const int n = static_cast<int>(intake_->components.size());
   std::vector<double> targets(n, 0.0);
   if (options_.edge_length > 0) return targets;
-  const double faces = options_.target_faces > 0 ? options_.target_faces : RemeshOptions::kDefaultTargetFaces;
+  const double faces = asked_quads();
   double total = 0;
   for (int c = 0; c < n; ++c) total += targets[c] = component_area(c);
   for (double& t : targets) t = total > 0 ? faces * t / total : 0.0;
@@ -197,7 +230,8 @@ void Session::prepare_components(Job job, Progress& progress) {
   progress.begin_stage("working_mesh");
   components_.clear();
   split_faces_ = 0;
-  const std::vector<char> features = map_input_edges(*intake_, options_.feature_edges, &unmatched_features_);
+  const std::vector<char> features =
+      map_input_edges(*intake_, half_ ? half_->feature_edges : options_.feature_edges, &unmatched_features_);
   const int n = static_cast<int>(intake_->components.size());
   for (int c = 0; c < n; ++c) {
     components_.push_back(prepare_component(c, features, job, progress));
@@ -270,7 +304,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for_each_component("quantization", progress, [&](ComponentState& s) {
     update_quantization(s, edge_length, quad_targets[&s - components_.data()], options_.quantizer, progress);
   });
-  report_["quantization"] = quantization_report(components_, options_.quantizer);
+  report_["quantization"] = quantization_report(components_, options_.quantizer, options_.symmetry.copies());
   for_each_component("igm", progress, [&](ComponentState& s) {
     update_integer_grid_map(s, job, progress);
     if (options_.fallback_uv_map) update_cell_map(s, progress);
@@ -280,7 +314,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
     for_each_component("quad_extraction", progress, [&](ComponentState& s) { update_quads(s, progress); });
     report_["extraction"] = extraction_report(components_, report_["igm"]);
   }
-  collect_grid_uvs();
+  if (!half_) collect_grid_uvs();  // the map of the input's own triangles (a half has other triangles)
   if (job == Job::Remesh) collect_quads(progress);
   report_failed_components();
 }
@@ -418,9 +452,10 @@ void Session::collect_quads(Progress& progress) {
     const QuadMesh& part = state.quads->extraction.quads;
     append_quad_mesh(*quads_, part, static_cast<int>(c));
     for (const int f : intake_faces_under_quad_centres(part, state))
-      quad_source_face_.push_back(f < 0 ? -1 : intake_->input_face[f]);
+      quad_source_face_.push_back(f < 0 ? -1 : input_face_of(f));
   }
   collect_kept_triangles(failed);
+  if (half_) mirror_results();
   report_["quad"] = measure_quads(quadded, failed.empty(), progress);
   report_["timings_s"]["metrics"] = timer.seconds();
 }
@@ -433,13 +468,14 @@ Json Session::measure_quads(const std::vector<int>& quadded, bool all_quadded, P
   std::vector<int> component_of(intake_->mesh.num_faces(), -1);
   for (size_t c = 0; c < intake_->components.size(); ++c)
     for (int f : intake_->components[c].faces) component_of[f] = static_cast<int>(c);
-  if (all_quadded) {
+  if (all_quadded && !half_) {
     options.reference_component = std::move(component_of);
     return compute_quad_metrics(*quads_, intake_->mesh, options, progress);
   }
   std::vector<int> face_map;
-  const TriMesh reference = extract_components(*intake_, quadded, nullptr, &face_map);
+  TriMesh reference = extract_components(*intake_, quadded, nullptr, &face_map);
   for (int f : face_map) options.reference_component.push_back(component_of[f]);
+  if (half_) reference = mirrored_reference(reference, options.reference_component);
   return compute_quad_metrics(*quads_, reference, options, progress);
 }
 
@@ -453,7 +489,7 @@ void Session::collect_kept_triangles(const std::vector<int>& failed) {
   kept_triangles_ = std::make_unique<TriMesh>();  // V and F only: a non-orientable part has no halfedges
   kept_triangles_->V = failed_parts.V;
   kept_triangles_->F = failed_parts.F;
-  for (int f : face_map) kept_source_face_.push_back(intake_->input_face[f]);
+  for (int f : face_map) kept_source_face_.push_back(input_face_of(f));
   for (int c : failed) kept_component_.insert(kept_component_.end(), intake_->components[c].faces.size(), c);
   for (size_t k = 0; k < intake_->non_orientable_parts.size(); ++k)
     append_non_orientable_part(intake_->non_orientable_parts[k], static_cast<int>(components_.size() + k));
@@ -467,7 +503,7 @@ void Session::append_non_orientable_part(const NonOrientablePart& part, int comp
   kept.F.conservativeResize(first + static_cast<int>(part.triangles.size()), 3);
   for (size_t t = 0; t < part.triangles.size(); ++t)
     for (int j = 0; j < 3; ++j) kept.F(first + t, j) = base + part.triangles[t][j];
-  kept_source_face_.insert(kept_source_face_.end(), part.input_face.begin(), part.input_face.end());
+  for (int f : part.input_face) kept_source_face_.push_back(half_ ? half_->input_face[f] : f);
   kept_component_.insert(kept_component_.end(), part.triangles.size(), component);
 }
 

@@ -15,8 +15,11 @@
 #include "intake/polygon_soup.h"
 #include "pipeline/component_state.h"
 #include "pipeline/options.h"
+#include "symmetry/symmetry.h"
 
 namespace qgp {
+
+class TriangleBvh;
 
 class Session {
  public:
@@ -56,6 +59,19 @@ class Session {
   const std::vector<std::array<int, 2>>& cut_edges() const { return cut_edges_; }
 
  private:
+  // What intake reads: the input, or its positive half when symmetry is asked.
+  const PolygonSoup& intake_input() const { return half_ ? half_->soup : input_; }
+  // The input face an intake face comes from (through the half when symmetry is asked).
+  int input_face_of(int intake_face) const;
+  // The quad count asked for the part intake reads (the whole count over the symmetric copies).
+  double asked_quads() const;
+  // The positive half options.symmetry asks for (null for none); throws when nothing is left.
+  std::unique_ptr<HalfSoup> cut_half(const RemeshOptions& options) const;
+  // Symmetry: quads_, quad_source_face_ and the kept triangles mirrored across the planes asked and
+  // welded there; the reference for the quad figures mirrored alike (pipeline/session_symmetry.cpp).
+  void mirror_results();
+  void mirror_kept_triangles(const TriangleBvh& input_faces, const std::vector<int>& triangle_face);
+  TriMesh mirrored_reference(const TriMesh& reference, std::vector<int>& component_of) const;
   void run_intake_stage(Progress& progress);
   void run_remesh_stages(Job job, Progress& progress);
   void prepare_components(Job job, Progress& progress);
@@ -84,6 +100,8 @@ class Session {
   void report_error(const std::string& code, const std::string& message);
 
   PolygonSoup input_;
+  std::unique_ptr<HalfSoup> half_;  // the positive half intake reads, when symmetry is asked
+  MirrorStats mirror_stats_;
   RemeshOptions options_;
   std::unique_ptr<IntakeResult> intake_;
   std::vector<ComponentState> components_;
