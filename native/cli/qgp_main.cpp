@@ -77,7 +77,7 @@ void report_abnormal_ends() {
 
 struct CommandLine {
   std::string command, input, output, report, features, uv_out, layout_out;
-  std::string quantizer = "greedy";
+  std::string quantizer = "greedy", symmetry;
   bool no_weld = false;
   qgp::RemeshOptions options;
 };
@@ -111,8 +111,23 @@ void add_commands(CLI::App& app, CommandLine& cl) {
                    "keep edges whose faces meet at more than DEG degrees as feature curves")
       ->check(CLI::Range(0.0, 180.0));
   remesh->add_option("--features", cl.features, "feature edges: a file with one 0-based vertex-index pair per line");
-  remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
-  remesh->add_option("--layout-out", cl.layout_out, "write the T-mesh (motorcycle graph) as .obj polylines");
+  CLI::Option* uv_out =
+      remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
+  remesh->add_option("--layout-out", cl.layout_out,
+                     "write the T-mesh (motorcycle graph) as .obj polylines (with --symmetry: the positive half's)");
+  remesh
+      ->add_option("--symmetry", cl.symmetry,
+                   "mirror-symmetric quads about the model's planes x = 0, y = 0, z = 0: x, y, z or a combination "
+                   "(xz); the positive side is remeshed and mirrored")
+      ->check([](const std::string& axes) {
+        try {
+          qgp::parse_symmetry_axes(axes);
+          return std::string();
+        } catch (const qgp::Error& e) {
+          return std::string(e.what());
+        }
+      })
+      ->excludes(uv_out);
   remesh
       ->add_option("--quantizer", cl.quantizer, "greedy (the paper's, default) or round (the direct-rounding baseline)")
       ->check(CLI::IsMember({"greedy", "round"}));
@@ -136,6 +151,7 @@ bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
   }
   cl->command = app.got_subcommand("info") ? "info" : "remesh";
   cl->options.quantizer = qgp::parse_quantizer(cl->quantizer);
+  cl->options.symmetry = qgp::parse_symmetry_axes(cl->symmetry);
   if (cl->no_weld) cl->options.weld_tolerance = 0;
   return true;
 }

@@ -88,6 +88,9 @@ def test_usage_errors(qgp, meshes, tmp):
                        (("remesh", spot, "-o", out, "--quantizer", "magic"), "unknown quantizer"),
                        (("remesh", spot, "-o", out, "--sharp-angle", 200), "sharp angle above 180"),
                        (("remesh", spot, "-o", out, "--faces", "many"), "a word for a number"),
+                       (("remesh", spot, "-o", out, "--symmetry", "xw"), "an unknown symmetry plane"),
+                       (("remesh", spot, "-o", out, "--symmetry", "x", "--uv-out", out + ".uv.obj"),
+                        "symmetry with the map of the input's triangles"),
                        (("frobnicate", spot), "unknown command")]:
         proc = run(qgp, *args)
         check(proc.returncode == 1 and proc.stderr.startswith("qgp: "), f"usage error ({what}): exit 1 with a reason")
@@ -172,6 +175,28 @@ def test_quad_count(qgp, meshes, tmp):
     check(proc.returncode == 0 and count.get("fewest_quads") == 6 == count["quads"]
           and "note: 3 quads asked, 6 made: 6 is the fewest this layout allows" in proc.stdout,
           f"cube --faces 3: exit 0, 6 quads, the fewest named on stdout ({proc.stdout.strip()[-160:]})")
+
+
+def test_symmetry(qgp, meshes, tmp):
+    """--symmetry: spot about x (its plane of symmetry) and the block about x, y and z (sharp edges at
+    40 degrees) give quads whose every vertex has its mirror image among the vertices, exactly, and
+    no open edge; fandisk lies on the negative side of z = 0: refused, naming the plane."""
+    for name, axes, extra in (("spot.obj", "x", []), ("block.obj", "xyz", ["--sharp-angle", 40])):
+        out, report = os.path.join(tmp, "symmetric.obj"), os.path.join(tmp, "symmetric.json")
+        proc = run(qgp, "remesh", os.path.join(meshes, name), "-o", out, "--faces", 1000, "--symmetry", axes,
+                   "--report", report, *extra)
+        vertices, faces, _ = read_obj(out) if proc.returncode == 0 else ([], [], [])
+        points = set(vertices)
+        images = [tuple(-c if "xyz"[i] == axis else c for i, c in enumerate(v)) for axis in axes for v in vertices]
+        open_edges = [e for e, fs in edge_faces(faces).items() if len(fs) == 1]
+        symmetry = json.load(open(report)).get("symmetry", {}) if proc.returncode == 0 else {}
+        check(proc.returncode == 0 and faces and all(image in points for image in images) and not open_edges
+              and symmetry.get("axes") == axes and abs(len(faces) - 1000) <= 50,
+              f"{name} --symmetry {axes}: {len(faces)} quads, every mirror image a vertex, no open edge ({symmetry})")
+    proc = run(qgp, "remesh", os.path.join(meshes, "fandisk.obj"), "-o", os.path.join(tmp, "none.obj"),
+               "--symmetry", "z")
+    check(proc.returncode != 0 and "positive side of z = 0" in proc.stderr,
+          f"fandisk --symmetry z: refused, naming the plane ({proc.stderr.strip()[-160:]})")
 
 
 def test_features(qgp, meshes, tmp):
@@ -315,7 +340,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
-                     test_quad_count,
+                     test_quad_count, test_symmetry,
                      test_features, test_drop_bad_components, test_weld, test_partial, test_non_orientable_part):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):

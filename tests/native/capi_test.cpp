@@ -158,6 +158,12 @@ TEST(CApi, OptionsAreValidated) {
   EXPECT_EQ(qgp_session_set_option(s, "sharp_angle", std::nan("")), QGP_ERR_INVALID_ARGUMENT);
   EXPECT_EQ(qgp_session_set_option_string(s, "quantizer", "round"), QGP_OK);
   EXPECT_EQ(qgp_session_set_option_string(s, "quantizer", "magic"), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", "X"), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", "xx"), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", "q"), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", "z"), QGP_ERR_INVALID_ARGUMENT);  // the grid is on z = 0
+  EXPECT_NE(std::string(qgp_session_error(s)).find("positive side of z = 0"), std::string::npos);
+  EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", ""), QGP_OK);
   const int32_t good[4] = {0, 1, 1, 2}, bad[2] = {0, 100};
   EXPECT_EQ(qgp_session_set_features(s, good, 2), QGP_OK);
   EXPECT_EQ(qgp_session_set_features(s, bad, 1), QGP_ERR_INVALID_ARGUMENT);

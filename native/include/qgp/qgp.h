@@ -81,7 +81,11 @@ QGP_API int qgp_session_set_features(qgp_session* session, const int32_t* edges,
  * edge_length. */
 QGP_API int qgp_session_set_option(qgp_session* session, const char* name, double value);
 
-/* String options: "quantizer" = "greedy" | "round". */
+/* String options: "quantizer" = "greedy" | "round"; "symmetry" = the mirror planes of the object's
+ * own axes, "" (none, the default), "x", "xz", "xyz", ...: the positive half is remeshed with the
+ * quad count divided among the copies, mirrored and welded on the planes (remesh jobs only; a grid-UV
+ * job with symmetry fails with QGP_ERR_INVALID_ARGUMENT). The report's "symmetry" object counts the
+ * faces cut and the vertices welded. */
 QGP_API int qgp_session_set_option_string(qgp_session* session, const char* name, const char* value);
 
 /* Starts a job (qgp_job) on the worker thread. QGP_ERR_BUSY if one is running. */

@@ -240,9 +240,11 @@ int qgp_session_set_option_string(qgp_session* session, const char* name, const 
     qgp::RemeshOptions options = session->session->options();
     if (std::string(name) == "quantizer") {
       options.quantizer = qgp::parse_quantizer(value);
+    } else if (std::string(name) == "symmetry") {
+      options.symmetry = qgp::parse_symmetry_axes(value);
     } else {
       throw qgp::Error(qgp::ErrorCode::InvalidArgument,
-                       "unknown string option '" + std::string(name) + "' (quantizer)");
+                       "unknown string option '" + std::string(name) + "' (quantizer, symmetry)");
     }
     session->session->set_options(options);
     return QGP_OK;
