@@ -87,7 +87,8 @@ def _quad_figures(report):
     has exactly), count_note (why it is more than 5 % off the count asked, or ""), where each
     component's quads come from (quad_paths: 'integer-grid map' or
     'T-mesh layout (why)', or 'kept as triangles'), how many components used the layout, the parts kept
-    as triangles (kept_parts, kept_triangles: added after the quads), and the quality figures."""
+    as triangles (kept_parts, kept_triangles: added after the quads), the planes the quads are
+    mirror-symmetric about (symmetry: "", "x", "xz", ...) and the quality figures."""
     extraction = report.get("extraction", {})
     quad = report.get("quad", {})
     failed = report.get("failed_components", [])
@@ -99,6 +100,7 @@ def _quad_figures(report):
                             for c in extraction.get("components", [])],
                 kept_parts=len(failed), kept_triangles=sum(int(f["triangles"]) for f in failed),
                 layout_components=int(extraction.get("layout_components", 0)),
+                symmetry=str(report.get("symmetry", {}).get("axes", "")),
                 flipped_quads=int(quad.get("flipped_quads", 0)),
                 hausdorff=float(quad.get("hausdorff", -1.0)))
 
@@ -202,6 +204,9 @@ DESCRIPTIONS = {
                        "attributes, taken from the nearest point on the source (materials are always kept)",
     "keep_source_uvs": "Give the quads the source's active UV map, taken from the nearest point on the "
                        "source for each face corner (stretched where a quad crosses a UV seam)",
+    "symmetry": "Mirror-symmetric quads about the object's own planes (its origin and local axes): the "
+                "positive side is remeshed, mirrored and welded on the plane; the other side of the source "
+                "is not used",
     "show_layout": "Also make an object '<name>_layout' with the quad layout's lines (the patches the quads "
                    "are laid out in), drawn in front",
     "quads_per_unit": "Grid cells per UV unit: a texture of this period tiles without visible seams",
@@ -235,8 +240,13 @@ def draw_features(layout, data):
 
 
 def draw_quad_output(layout, data):
-    """The quad object's output options."""
+    """The quad object's output options: symmetry (X, Y, Z toggles) and what the object keeps."""
     layout.use_property_split = False
+    # The label above its toggles, not beside them: a row of both cuts it at the sidebar's default width.
+    layout.label(text="Symmetry")
+    row = layout.row(align=True)
+    for index, axis in enumerate("XYZ"):
+        row.prop(data, "symmetry", index=index, text=axis, toggle=True)
     col = layout.column(align=True)
     col.prop(data, "keep_source_visible")
     col.prop(data, "keep_attributes")
@@ -310,7 +320,12 @@ class _TargetProperties(TargetSettings):
             session.set_option("edge_length", self.edge_length)
         session.set_option("fallback_uv_map", 1 if self._wants_fallback_map() else 0)
         session.set_option("weld_tolerance", _WELD_TOLERANCE if self.weld else 0.0)
+        session.set_option_string("symmetry", self._symmetry())
         return session
+
+    def _symmetry(self):
+        """The planes the result is mirror-symmetric about ("", "x", "xz", ...)."""
+        return ""
 
     def _wants_fallback_map(self):
         return False
@@ -364,9 +379,14 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
     keep_source_uvs: bpy.props.BoolProperty(name="Keep Source UVs", default=False,
                                             description=DESCRIPTIONS["keep_source_uvs"])
     show_layout: bpy.props.BoolProperty(name="Show Layout", default=False, description=DESCRIPTIONS["show_layout"])
+    symmetry: bpy.props.BoolVectorProperty(name="Symmetry", size=3, subtype="XYZ", default=(False, False, False),
+                                           description=DESCRIPTIONS["symmetry"])
 
     def _kept_of_source(self):
         return self.keep_attributes, self.keep_source_uvs
+
+    def _symmetry(self):
+        return "".join(axis for axis, on in zip("xyz", self.symmetry) if on)
 
     def _finish(self, context):
         vertices, quads, quad_triangle = self._session.quad_mesh()
@@ -380,6 +400,8 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         if not self.keep_source_visible:
             self._source_obj.hide_set(True)
         message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
+        if obj["qgp"]["symmetry"]:
+            message += f", mirror-symmetric in {obj['qgp']['symmetry'].upper()}"
         warn = bool(obj["qgp"]["count_note"])
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
             message += f"; {obj['qgp']['count_note']}"

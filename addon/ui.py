@@ -12,6 +12,8 @@ class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
     keep_attributes: flag("keep_attributes", "Keep Attributes", True)
     keep_source_uvs: flag("keep_source_uvs", "Keep Source UVs", False)
     show_layout: flag("show_layout", "Show Layout", False)
+    symmetry: bpy.props.BoolVectorProperty(name="Symmetry", size=3, subtype="XYZ", default=(False, False, False),
+                                           description=DESCRIPTIONS["symmetry"])
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description=DESCRIPTIONS["quads_per_unit"])
     mark_seams: flag("mark_seams", "Mark Seams", False)
@@ -19,7 +21,7 @@ class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
 
 # The settings both operators take, and those of each one's output.
 _SHARED = tuple(TargetSettings.__annotations__)
-_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout")
+_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout", "symmetry")
 _UV_OUTPUT = ("quads_per_unit", "mark_seams")
 
 

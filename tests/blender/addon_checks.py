@@ -451,3 +451,69 @@ def check_attributes_not_kept(quad):
     mesh = quad.data
     assert not quad.vertex_groups and "Col" not in mesh.attributes and "region" not in mesh.attributes
     assert not mesh.uv_layers and {p.material_index for p in mesh.polygons} == {0, 1}
+
+
+def check_symmetric(quad, axes):
+    """The quad object is mirror-symmetric about its local planes `axes` ("x", "xz", ...): every
+    vertex's mirror image is within 1e-6 of the bounding-box diagonal of a vertex, and no edge on a
+    plane is open (the two sides are welded). Returns the largest image distance / diagonal."""
+    from mathutils import kdtree
+    mesh = quad.data
+    points = [v.co.copy() for v in mesh.vertices]
+    tree = kdtree.KDTree(len(points))
+    for i, p in enumerate(points):
+        tree.insert(p, i)
+    tree.balance()
+    low = [min(p[i] for p in points) for i in range(3)]
+    high = [max(p[i] for p in points) for i in range(3)]
+    diagonal = sum((h - lo) ** 2 for h, lo in zip(high, low)) ** 0.5
+    indices = ["xyz".index(a) for a in axes]
+    worst = 0.0
+    for i in indices:
+        for p in points:
+            image = p.copy()
+            image[i] = -image[i]
+            worst = max(worst, tree.find(image)[2])
+    assert worst <= 1e-6 * diagonal, (axes, worst / diagonal)
+    tolerance = 1e-6 * diagonal
+    open_on_plane = [key for key, count in edge_face_counts(mesh).items() if count == 1 and any(
+        all(abs(points[v][i]) <= tolerance for v in key) for i in indices)]
+    assert not open_on_plane, f"{len(open_on_plane)} open edge(s) on a symmetry plane"
+    return worst / diagonal
+
+
+# (planes, quads asked) of the symmetry tests: Suzanne about X, a UV sphere about X and Z.
+SYMMETRY_CASES = (("x", 1200), ("xz", 800))
+
+
+def symmetry_source(axes):
+    """The source of a SYMMETRY_CASES test: for "x" Suzanne (subdivided once, moved and turned: the
+    planes are the object's own), else a UV sphere."""
+    if axes == "x":
+        bpy.ops.mesh.primitive_monkey_add()
+        monkey = bpy.context.active_object
+        monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
+        bpy.ops.object.modifier_apply(modifier="subsurf")
+        monkey.location = (1.5, -2.0, 0.25)
+        monkey.rotation_euler = (0.3, 0.0, 1.1)
+        bpy.context.view_layer.update()
+        return monkey
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24)
+    return bpy.context.active_object
+
+
+def run_symmetry(source, axes, target):
+    """Quantized Retopo with Symmetry `axes` on `source`: the quads are symmetric and welded
+    (check_symmetric), within 5 % of `target` or with the count's note, the figures name the planes
+    and the source is unchanged. Returns (quads, largest image distance / diagonal)."""
+    before = mesh_data_state(source)
+    flags = tuple(a in axes for a in "xyz")
+    quad = run_quad_remesh(source, target_faces=target, symmetry=flags, keep_source_visible=True)
+    figures = quad["qgp"].to_dict()
+    assert figures["symmetry"] == axes, figures
+    count = len(quad.data.polygons)
+    assert abs(count - target) <= 0.05 * target or figures["count_note"], (count, figures)
+    assert all(len(p.vertices) == 4 for p in quad.data.polygons)
+    assert figures["flipped_quads"] == 0, figures
+    assert mesh_data_state(source) == before, "the source changed"
+    return count, check_symmetric(quad, axes)

@@ -391,6 +391,20 @@ def test_attributes_kept():
     print("Keep Attributes off: materials only")
 
 
+def test_symmetry():
+    """Symmetry (X, Y, Z toggles, all off by default): Suzanne (subdivided, moved and turned: the
+    planes are the object's own) about X, and a UV sphere about X and Z: mirror-symmetric quads,
+    welded on the planes, the count asked for; the source unchanged."""
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    assert tuple(properties["symmetry"].default_array) == (False, False, False)
+    for axes, target in addon_checks.SYMMETRY_CASES:
+        reset_scene()
+        source = addon_checks.symmetry_source(axes)
+        count, error = addon_checks.run_symmetry(source, axes, target)
+        print(f"symmetry {axes.upper()} on {source.name}: {count} quads (target {target}), mirror images within "
+              f"{error:.1e} of the diagonal, welded")
+
+
 def test_show_layout():
     """Show Layout (off by default): beside the quads, an object '<name>_layout' of edges only with
     the source's transform: exactly the native session's layout lines (the T-mesh, traced on the
@@ -763,7 +777,8 @@ def main():
     tests = [(test_registration, ()), (test_broken_inputs, (binding,)),
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
-             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_panel_draws, ()),
+             (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_symmetry, ()),
+             (test_panel_draws, ()),
              (test_show_layout, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),

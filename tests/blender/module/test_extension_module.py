@@ -130,6 +130,16 @@ def test_guides_and_attributes():
     print(f"attributes and UV map kept on {len(quad.data.polygons)} quads, weights within {error:.4f}")
 
 
+def test_symmetry():
+    """Symmetry on this Blender's primitives (as test_addon.py checks it in 3.4): mirror-symmetric
+    quads welded on the planes."""
+    for axes, target in addon_checks.SYMMETRY_CASES:
+        reset_scene()
+        source = addon_checks.symmetry_source(axes)
+        count, error = addon_checks.run_symmetry(source, axes, target)
+        print(f"symmetry {axes.upper()} on {source.name}: {count} quads, mirror images within {error:.1e}, welded")
+
+
 def test_batch():
     """The installed extension's batch script, run by this interpreter (the module has no Blender
     binary: bpy.app.binary_path is empty): it registers the add-on from its own folder, with the
@@ -164,6 +174,7 @@ def main():
         test_registration(binding)
         test_operators(binding)
         test_guides_and_attributes()
+        test_symmetry()
         test_batch()
         bpy.ops.preferences.addon_disable(module=PACKAGE)
         assert not hasattr(bpy.types, "OBJECT_OT_qgp_quad_remesh"), "the add-on did not unregister"
