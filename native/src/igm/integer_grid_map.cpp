@@ -442,7 +442,7 @@ IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField
       progress_(progress),
       inputs_checked_(check_inputs(mesh, field, cut, seamless, sanitized, tmesh, quantization, options)),
       problem_(mesh, seamless.param.rotation, seamless.param.is_cut, cut.frame_u,
-               options.edge_length / quantization.scale),
+               options.edge_length / quantization.scale, seamless.face_size),
       scale_(quantization.scale),
       cones_(cone_quarter_turns(mesh, field)) {
   add_seamless_isolines(seamless, cut);

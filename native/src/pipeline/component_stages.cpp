@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/sanitize_isolines.h"
 #include "pipeline/policy.h"
+#include "sizing/sizing.h"
 #include "tmesh/trace_tmesh.h"
 
 namespace qgp {
@@ -45,13 +46,15 @@ void update_cut_graph(ComponentState& state, Progress& progress) {
   state.cut.store(state.field.id(), compute_cut_graph(state.mesh, *state.field, progress));
 }
 
-void update_seamless_map(ComponentState& state, double edge_length, Progress& progress) {
+void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress) {
+  const uint64_t sizing = sizes_hash(face_size);
   if (state.seamless.has_value() && state.seamless.key().cut == state.cut.id() &&
-      seamless_map_serves(state.seamless.key().edge_length, edge_length))
+      state.seamless.key().sizing == sizing && seamless_map_serves(state.seamless.key().edge_length, edge_length))
     return;  // re-quantized only
   SeamlessMapOptions options;
   options.edge_length = edge_length;
-  state.seamless.store({state.cut.id(), edge_length},
+  options.face_size = std::move(face_size);
+  state.seamless.store({state.cut.id(), edge_length, sizing},
                        compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
 }
 

@@ -11,9 +11,10 @@ namespace qgp {
 // Stage 1a, 1b: the cross field (hard-constrained on the component's feature edges) and its cut graph.
 void update_cross_field(ComponentState& state, Progress& progress);
 void update_cut_graph(ComponentState& state, Progress& progress);
-// Stage 1c: the seamless map for quads of `edge_length` (a map solved for a nearby length is
-// rescaled instead, see seamless_map_serves).
-void update_seamless_map(ComponentState& state, double edge_length, Progress& progress);
+// Stage 1c: the seamless map for quads of `edge_length` times face_size (the sizing field, #F, or
+// empty; a map solved for a nearby length and the same sizes is rescaled instead, see
+// seamless_map_serves).
+void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress);
 // Stage 2: the seamless map made exact with features and boundary on isolines, and its T-mesh.
 void update_tmesh(ComponentState& state, Progress& progress);
 // Stage 3: integer T-edge lengths for quads of `edge_length`, by the chosen quantizer; the greedy

@@ -95,7 +95,10 @@ struct PartFailure {
 struct SeamlessKey {
   uint64_t cut = 0;
   double edge_length = 0;  // target quad edge length the map was solved for (1 uv unit)
-  bool operator==(const SeamlessKey& o) const { return cut == o.cut && edge_length == o.edge_length; }
+  uint64_t sizing = 0;     // sizes_hash of the sizing field (0: uniform)
+  bool operator==(const SeamlessKey& o) const {
+    return cut == o.cut && edge_length == o.edge_length && sizing == o.sizing;
+  }
 };
 struct QuantizationKey {
   uint64_t traced = 0;

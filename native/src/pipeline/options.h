@@ -27,6 +27,10 @@ struct RemeshOptions {
   // Mirror symmetry about the input's coordinate planes (Remesh only): the positive half is remeshed
   // with target_faces / copies quads, then mirrored and welded (symmetry/symmetry.h).
   SymmetryAxes symmetry;
+  // The sizing field (sizing/sizing.h): curvature-adaptive size in [0, 1] (0: uniform), and a linear
+  // quad density per input vertex (2: quads half as long there; empty: none).
+  double adaptive = 0;
+  std::vector<double> density;
 
   static constexpr double kDefaultTargetFaces = 2000;
 };

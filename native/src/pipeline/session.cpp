@@ -13,6 +13,7 @@
 #include "pipeline/report.h"
 #include "pipeline/split_faces.h"
 #include "quad_extraction/surface_projection.h"
+#include "sizing/sizing.h"
 
 namespace qgp {
 namespace {
@@ -47,6 +48,16 @@ void Session::set_options(const RemeshOptions& options) {
   if (!std::isfinite(options.target_faces) || !std::isfinite(options.edge_length) ||
       !std::isfinite(options.sharp_angle_deg))
     throw Error(ErrorCode::InvalidArgument, "options must be finite numbers");
+  if (!(options.adaptive >= 0 && options.adaptive <= 1))
+    throw Error(ErrorCode::InvalidArgument, "adaptive size must be a number from 0 (uniform) to 1");
+  if (!options.density.empty() && static_cast<int>(options.density.size()) != input_.num_vertices())
+    throw Error(ErrorCode::InvalidArgument, "the density has " + std::to_string(options.density.size()) +
+                                                " values for " + std::to_string(input_.num_vertices()) +
+                                                " vertices: give one per vertex");
+  for (size_t v = 0; v < options.density.size(); ++v)
+    if (!(options.density[v] > 0) || !std::isfinite(options.density[v]))
+      throw Error(ErrorCode::InvalidArgument,
+                  "the density of vertex " + std::to_string(v) + " is not a positive number");
   if (!(options.weld_tolerance >= 0) || !std::isfinite(options.weld_tolerance))
     throw Error(ErrorCode::InvalidArgument, "the weld tolerance must be a finite number >= 0");
   if (options.sharp_angle_deg > 180) throw Error(ErrorCode::InvalidArgument, "sharp angle must be at most 180 degrees");
@@ -54,7 +65,8 @@ void Session::set_options(const RemeshOptions& options) {
     if (e[0] < 0 || e[1] < 0 || e[0] >= input_.num_vertices() || e[1] >= input_.num_vertices() || e[0] == e[1])
       throw Error(ErrorCode::InvalidArgument, "feature edge (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
                                                   ") is not a pair of distinct vertices of the mesh");
-  const bool half_changed = options.symmetry != options_.symmetry || options.feature_edges != options_.feature_edges;
+  const bool half_changed = options.symmetry != options_.symmetry || options.feature_edges != options_.feature_edges ||
+                            options.density != options_.density;
   std::unique_ptr<HalfSoup> half = half_changed ? cut_half(options) : nullptr;
   if (options.drop_bad_components != options_.drop_bad_components ||
       options.weld_tolerance != options_.weld_tolerance ||
@@ -73,7 +85,8 @@ std::unique_ptr<HalfSoup> Session::cut_half(const RemeshOptions& options) const 
   Eigen::AlignedBox3d box;
   for (const Vec3& p : input_.positions) box.extend(p);
   const double snap = input_.positions.empty() ? 0.0 : kSymmetrySnapTolerance * box.diagonal().norm();
-  auto half = std::make_unique<HalfSoup>(cut_to_positive_half(input_, options.feature_edges, options.symmetry, snap));
+  auto half = std::make_unique<HalfSoup>(
+      cut_to_positive_half(input_, options.feature_edges, options.symmetry, snap, options.density));
   if (half->soup.num_faces() == 0 && input_.num_faces() > 0) {
     std::string planes;
     for (char axis : options.symmetry.name()) planes += std::string(planes.empty() ? "" : ", ") + axis + " = 0";
@@ -88,6 +101,20 @@ std::unique_ptr<HalfSoup> Session::cut_half(const RemeshOptions& options) const 
 int Session::input_face_of(int intake_face) const {
   const int f = intake_->input_face[intake_face];
   return half_ ? half_->input_face[f] : f;
+}
+
+std::vector<double> Session::component_face_sizes(const ComponentState& state) const {
+  SizingOptions sizing;
+  sizing.adaptive = options_.adaptive;
+  const std::vector<double>& density = half_ ? half_->vertex_values : options_.density;
+  if (!density.empty()) {
+    sizing.vertex_density.assign(state.mesh.num_vertices(), 1.0);
+    for (int v = 0; v < state.mesh.num_vertices(); ++v) {
+      const int intake_vertex = state.vertex_map[v];  // -1 for a vertex splitting a face
+      if (intake_vertex >= 0) sizing.vertex_density[v] = density[intake_->input_vertex[intake_vertex]];
+    }
+  }
+  return face_sizes(state.mesh, state.feature_edges, sizing);
 }
 
 double Session::asked_quads() const {
@@ -295,8 +322,9 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for_each_component("cross_field", progress, [&](ComponentState& s) { update_cross_field(s, progress); });
   for_each_component("cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
   report_["field"] = field_report(components_);
-  for_each_component("seamless_map", progress,
-                     [&](ComponentState& s) { update_seamless_map(s, edge_length, progress); });
+  for_each_component("seamless_map", progress, [&](ComponentState& s) {
+    update_seamless_map(s, edge_length, component_face_sizes(s), progress);
+  });
   report_["seamless"] = seamless_report(components_, edge_length);
   for_each_component("tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
   report_["tmesh"] = tmesh_report(components_);

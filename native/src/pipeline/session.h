@@ -65,6 +65,8 @@ class Session {
   int input_face_of(int intake_face) const;
   // The quad count asked for the part intake reads (the whole count over the symmetric copies).
   double asked_quads() const;
+  // The sizing field on the component's mesh (options adaptive and density), #F or empty.
+  std::vector<double> component_face_sizes(const ComponentState& state) const;
   // The positive half options.symmetry asks for (null for none); throws when nothing is left.
   std::unique_ptr<HalfSoup> cut_half(const RemeshOptions& options) const;
   // Symmetry: quads_, quad_source_face_ and the kept triangles mirrored across the planes asked and

@@ -99,7 +99,8 @@ struct ParametrizationProblem::System {
 };
 
 ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
-                                               std::vector<char> is_cut, std::vector<Vec3> frame_u, double edge_length)
+                                               std::vector<char> is_cut, std::vector<Vec3> frame_u, double edge_length,
+                                               const std::vector<double>& face_size)
     : mesh_(mesh), rotation_(std::move(rotation)), is_cut_(std::move(is_cut)), edge_length_(edge_length) {
   const int nf = mesh.num_faces(), nc = 3 * nf;
   if (nf == 0 || static_cast<int>(mesh.opposite.size()) != nc)
@@ -109,6 +110,11 @@ ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<
     throw Error(ErrorCode::InvalidArgument, "parametrization: rotation / cut / frame arrays do not match the mesh");
   if (!(edge_length > 0) || !std::isfinite(edge_length))
     throw Error(ErrorCode::InvalidArgument, "parametrization: the target edge length must be positive");
+  if (!face_size.empty() && static_cast<int>(face_size.size()) != nf)
+    throw Error(ErrorCode::InvalidArgument, "parametrization: the face sizes do not match the mesh");
+  for (double s : face_size)
+    if (!(s > 0) || !std::isfinite(s))
+      throw Error(ErrorCode::InvalidArgument, "parametrization: a face size is not a positive number");
   if (is_cut_.empty()) is_cut_.assign(mesh.num_edges(), 0);
   for (int h = 0; h < nc; ++h) {
     const int o = mesh.opposite[h];
@@ -153,6 +159,7 @@ ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<
   ideal_area_.resize(nf);
   gradient_.resize(nf);
   for (int f = 0; f < nf; ++f) {
+    const double length = face_size.empty() ? edge_length : edge_length * face_size[f];
     const Vec3 p0 = mesh.position(mesh.F(f, 0)), p1 = mesh.position(mesh.F(f, 1)), p2 = mesh.position(mesh.F(f, 2));
     const Vec3 n = (p1 - p0).cross(p2 - p0);
     Vec2 q[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()};
@@ -163,14 +170,14 @@ ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<
       if (fu.norm() > 0 && std::isfinite(fu.norm())) {
         fu.normalize();
         const Vec3 fv = nn.cross(fu);
-        q[1] = Vec2((p1 - p0).dot(fu), (p1 - p0).dot(fv)) / edge_length;
-        q[2] = Vec2((p2 - p0).dot(fu), (p2 - p0).dot(fv)) / edge_length;
+        q[1] = Vec2((p1 - p0).dot(fu), (p1 - p0).dot(fv)) / length;
+        q[2] = Vec2((p2 - p0).dot(fu), (p2 - p0).dot(fv)) / length;
         ok = cross2(q[1], q[2]) > 0;
       }
     }
     if (!ok) {
       // Degenerate face or frame: an equilateral stand-in of the same mean edge length.
-      const double len = ((p1 - p0).norm() + (p2 - p1).norm() + (p0 - p2).norm()) / 3 / edge_length;
+      const double len = ((p1 - p0).norm() + (p2 - p1).norm() + (p0 - p2).norm()) / 3 / length;
       if (!(len > 0) || !std::isfinite(len))
         throw Error(ErrorCode::InvalidMesh, "parametrization: face " + std::to_string(f) + " has no extent");
       q[1] = Vec2(len, 0);

@@ -10,7 +10,8 @@
 //   - optionally the caller's linear constraints (or they enter as a penalty),
 //   - optionally one wedge pinned at the origin (the energy does not see global translations).
 // Energy (Bommes et al. 2009): sum_f area_f (|grad u - frame_u/L|^2 + |grad v - frame_v/L|^2),
-// frame_v = n x frame_u, L = edge_length (one uv unit = L model units).
+// frame_v = n x frame_u, L = edge_length (one uv unit = L model units), times the face's size where a
+// sizing field is given.
 //
 // Regularity (no flipped or degenerate triangle): the equality-only optimum is computed by sparse
 // Cholesky (CHOLMOD). Where it has flipped, degenerate or nearly collapsed triangles, those faces
@@ -98,9 +99,10 @@ class ParametrizationProblem {
  public:
   // mesh must outlive the problem. rotation: 3#F transition quarter turns (as
   // Parametrization::rotation); is_cut: #E (edges with rotation != 0 are cuts anyway);
-  // frame_u: #F tangent directions (+u axis of each face's chart); edge_length > 0.
+  // frame_u: #F tangent directions (+u axis of each face's chart); edge_length > 0; face_size: #F
+  // multiples of edge_length, the sizing field (sizing/sizing.h; empty: 1 everywhere).
   ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation, std::vector<char> is_cut,
-                         std::vector<Vec3> frame_u, double edge_length);
+                         std::vector<Vec3> frame_u, double edge_length, const std::vector<double>& face_size = {});
   ~ParametrizationProblem();
   ParametrizationProblem(const ParametrizationProblem&) = delete;
   ParametrizationProblem& operator=(const ParametrizationProblem&) = delete;

@@ -87,8 +87,8 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   IsolineSelection iso = select_isolines(mesh, field, cut);
   std::unique_ptr<ParametrizationProblem> problem;
   for (int attempt = 0;; ++attempt) {
-    problem =
-        std::make_unique<ParametrizationProblem>(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length);
+    problem = std::make_unique<ParametrizationProblem>(mesh, cut.rotation, cut.is_cut, cut.frame_u, options.edge_length,
+                                                       options.face_size);
     for (const Isoline& line : iso.isolines) problem->add_isoline(line.halfedge, line.axis);
     const std::vector<int> forced = problem->forced_degenerate_faces(progress);
     if (forced.empty() || attempt == 8) break;
@@ -127,6 +127,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
 
   SeamlessMap out;
   out.param = std::move(solution.param);
+  out.face_size = options.face_size;
   const ParametrizationSolveStats& s = solution.stats;
   SeamlessMapStats& st = out.stats;
   st.flipped_triangles = s.flipped;

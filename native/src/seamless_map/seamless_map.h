@@ -12,10 +12,11 @@
 namespace qgp {
 
 struct SeamlessMapOptions {
-  double edge_length = 1;      // target quad edge length in model units: 1 uv unit = edge_length
-  bool regularity = true;      // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
-  int max_repair_rounds = 24;  // Ipopt repair rounds at most (see ParametrizationSolveOptions)
-  bool winding_repair = true;  // see ParametrizationSolveOptions
+  double edge_length = 1;         // target quad edge length in model units: 1 uv unit = edge_length
+  std::vector<double> face_size;  // #F multiples of edge_length (sizing/sizing.h); empty: uniform
+  bool regularity = true;         // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
+  int max_repair_rounds = 24;     // Ipopt repair rounds at most (see ParametrizationSolveOptions)
+  bool winding_repair = true;     // see ParametrizationSolveOptions
 };
 
 struct SeamlessMapStats {
@@ -47,6 +48,7 @@ QGP_JSON_FIELDS(SeamlessMapStats, flipped_triangles, degenerate_triangles, windi
 struct SeamlessMap {
   Parametrization param;  // rotation[] and is_cut from the cut graph
   SeamlessMapStats stats;
+  std::vector<double> face_size;  // the sizing field it was solved with (SeamlessMapOptions)
 };
 
 // Feature and boundary edges that become isolines, from the cut graph's edge sectors. An edge is

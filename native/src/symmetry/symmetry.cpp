@@ -66,6 +66,9 @@ class PlaneCut {
   PolygonSoup out;
   std::vector<int> face_from;    // per output face: the soup face it comes from
   std::vector<int> vertex_from;  // per output vertex: the soup vertex, -1 for a cut point
+  // Per output vertex that is a cut point: the soup edge's ends (a, b) and where along it (from a).
+  std::vector<std::pair<int, int>> cut_ends;
+  std::vector<double> cut_t;
   int cut = 0, dropped = 0, snapped = 0;
 
  private:
@@ -76,6 +79,8 @@ class PlaneCut {
       new_index_[v] = out.num_vertices();
       out.positions.push_back(positions_[v]);
       vertex_from.push_back(v);
+      cut_ends.push_back({-1, -1});
+      cut_t.push_back(0);
     }
     return new_index_[v];
   }
@@ -88,11 +93,14 @@ class PlaneCut {
     if (found != cut_points_.end()) return found->second;
     const Vec3& p = positions_[key.first];
     const Vec3& q = positions_[key.second];
-    Vec3 point = p + (p[axis_] / (p[axis_] - q[axis_])) * (q - p);
+    const double t = p[axis_] / (p[axis_] - q[axis_]);
+    Vec3 point = p + t * (q - p);
     point[axis_] = 0;
     const int index = out.num_vertices();
     out.positions.push_back(point);
     vertex_from.push_back(-1);
+    cut_ends.push_back(key);
+    cut_t.push_back(t);
     cut_points_.emplace(key, index);
     return index;
   }
@@ -127,7 +135,8 @@ class PlaneCut {
 }  // namespace
 
 HalfSoup cut_to_positive_half(const PolygonSoup& input, const std::vector<std::array<int, 2>>& feature_edges,
-                              const SymmetryAxes& axes, double snap_tolerance) {
+                              const SymmetryAxes& axes, double snap_tolerance,
+                              const std::vector<double>& vertex_values) {
   HalfSoup half;
   half.soup = input;
   half.input_face.resize(input.num_faces());
@@ -135,6 +144,7 @@ HalfSoup cut_to_positive_half(const PolygonSoup& input, const std::vector<std::a
   for (int f = 0; f < input.num_faces(); ++f) half.input_face[f] = f;
   for (int v = 0; v < input.num_vertices(); ++v) half.input_vertex[v] = v;
   half.feature_edges = feature_edges;
+  half.vertex_values = vertex_values;
   for (int a = 0; a < 3; ++a) {
     if (!axes.axis[a]) continue;
     PlaneCut step(half.soup, a, snap_tolerance);
@@ -144,6 +154,14 @@ HalfSoup cut_to_positive_half(const PolygonSoup& input, const std::vector<std::a
       if (step.cut_feature(e, kept)) features.push_back(kept);
     }
     std::vector<int> input_face, input_vertex;
+    std::vector<double> values;
+    if (!half.vertex_values.empty())
+      for (int v = 0; v < step.out.num_vertices(); ++v) {
+        const auto [a, b] = step.cut_ends[v];
+        const double t = step.cut_t[v];
+        values.push_back(step.vertex_from[v] >= 0 ? half.vertex_values[step.vertex_from[v]]
+                                                  : (1 - t) * half.vertex_values[a] + t * half.vertex_values[b]);
+      }
     for (int f : step.face_from) input_face.push_back(half.input_face[f]);
     for (int v : step.vertex_from) input_vertex.push_back(v < 0 ? -1 : half.input_vertex[v]);
     half.cut_faces += step.cut;
@@ -152,6 +170,7 @@ HalfSoup cut_to_positive_half(const PolygonSoup& input, const std::vector<std::a
     half.soup = std::move(step.out);
     half.input_face = std::move(input_face);
     half.input_vertex = std::move(input_vertex);
+    half.vertex_values = std::move(values);
     half.feature_edges = std::move(features);
   }
   return half;

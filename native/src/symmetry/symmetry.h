@@ -34,6 +34,8 @@ struct HalfSoup {
   std::vector<int> input_face;                    // per soup face: the input face it was cut from
   std::vector<int> input_vertex;                  // per soup vertex: its input vertex, -1 if made by a cut
   std::vector<std::array<int, 2>> feature_edges;  // the input's feature edges on the half (soup indices)
+  std::vector<double> vertex_values;              // the input's per-vertex values on the half (cut points
+                                                  // interpolated along their edge); empty if none given
   int cut_faces = 0;                              // input faces clipped by a plane
   int dropped_faces = 0;                          // input faces wholly on the negative side (or on a plane)
   int snapped_vertices = 0;                       // input vertices moved onto a plane (within tolerance)
@@ -41,9 +43,10 @@ struct HalfSoup {
 
 // Vertices within snap_tolerance (model units) of a plane are moved onto it before cutting, so that
 // the cut makes no sliver next to them. feature_edges: input vertex pairs (as RemeshOptions has
-// them); an edge cut by a plane keeps its positive part.
+// them); an edge cut by a plane keeps its positive part. vertex_values: one per input vertex, or empty.
 HalfSoup cut_to_positive_half(const PolygonSoup& input, const std::vector<std::array<int, 2>>& feature_edges,
-                              const SymmetryAxes& axes, double snap_tolerance);
+                              const SymmetryAxes& axes, double snap_tolerance,
+                              const std::vector<double>& vertex_values = {});
 
 struct MirrorStats {
   int welded_vertices = 0;      // vertices on a plane, shared by a face and its mirror image
