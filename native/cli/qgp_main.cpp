@@ -76,7 +76,7 @@ void report_abnormal_ends() {
 }
 
 struct CommandLine {
-  std::string command, input, output, report, features, uv_out, layout_out;
+  std::string command, input, output, report, features, uv_out, layout_out, density;
   std::string quantizer = "greedy", symmetry;
   bool no_weld = false;
   qgp::RemeshOptions options;
@@ -111,6 +111,14 @@ void add_commands(CLI::App& app, CommandLine& cl) {
                    "keep edges whose faces meet at more than DEG degrees as feature curves")
       ->check(CLI::Range(0.0, 180.0));
   remesh->add_option("--features", cl.features, "feature edges: a file with one 0-based vertex-index pair per line");
+  remesh
+      ->add_option("--adaptive", cl.options.adaptive,
+                   "curvature-adaptive quad size, 0 (uniform, default) to 1 (edge length follows the radius of "
+                   "curvature, within 4x either way)")
+      ->check(CLI::Range(0.0, 1.0));
+  remesh->add_option("--density", cl.density,
+                     "painted density: a file with one positive number per input vertex (one per line, in the "
+                     "file's vertex order): the linear quad density there (2: quads half as long)");
   CLI::Option* uv_out =
       remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
   remesh->add_option("--layout-out", cl.layout_out,
@@ -154,6 +162,30 @@ bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
   cl->options.symmetry = qgp::parse_symmetry_axes(cl->symmetry);
   if (cl->no_weld) cl->options.weld_tolerance = 0;
   return true;
+}
+
+// --density: one number per non-blank line ('#' starts a comment).
+std::vector<double> read_density(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw qgp::Error(qgp::ErrorCode::UnreadableFile, "cannot read density file '" + path + "'");
+  std::vector<double> values;
+  std::string line;
+  for (int line_no = 1; std::getline(in, line); ++line_no) {
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    double value;
+    std::string rest;
+    if (!(ls >> value)) {
+      if (ls.eof() && line.find_first_not_of(" \t\r") == std::string::npos) continue;  // blank
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument,
+                       "density file '" + path + "' line " + std::to_string(line_no) + ": expected a number");
+    }
+    if (ls >> rest)
+      throw qgp::Error(qgp::ErrorCode::InvalidArgument,
+                       "density file '" + path + "' line " + std::to_string(line_no) + ": one number per line");
+    values.push_back(value);
+  }
+  return values;
 }
 
 std::vector<std::array<int, 2>> read_feature_pairs(const std::string& path) {
@@ -305,6 +337,7 @@ int run(const CommandLine& cl) {
     qgp::RemeshOptions options = cl.options;
     options.fallback_uv_map = !cl.uv_out.empty();
     if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
+    if (!cl.density.empty()) options.density = read_density(cl.density);
     session->set_options(options);
     qgp::Progress progress;
     {

@@ -87,6 +87,7 @@ def test_usage_errors(qgp, meshes, tmp):
                        (("remesh", spot, "-o", out, "--faces", 100, "--edge-length", 0.1), "both sizes"),
                        (("remesh", spot, "-o", out, "--quantizer", "magic"), "unknown quantizer"),
                        (("remesh", spot, "-o", out, "--sharp-angle", 200), "sharp angle above 180"),
+                       (("remesh", spot, "-o", out, "--adaptive", 2), "adaptive size above 1"),
                        (("remesh", spot, "-o", out, "--faces", "many"), "a word for a number"),
                        (("remesh", spot, "-o", out, "--symmetry", "xw"), "an unknown symmetry plane"),
                        (("remesh", spot, "-o", out, "--symmetry", "x", "--uv-out", out + ".uv.obj"),
@@ -197,6 +198,51 @@ def test_symmetry(qgp, meshes, tmp):
                "--symmetry", "z")
     check(proc.returncode != 0 and "positive side of z = 0" in proc.stderr,
           f"fandisk --symmetry z: refused, naming the plane ({proc.stderr.strip()[-160:]})")
+
+
+def read_off_vertices(path):
+    tokens = open(path).read().split()
+    count = int(tokens[1])
+    return [tuple(map(float, tokens[4 + 3 * i:7 + 3 * i])) for i in range(count)]
+
+
+def mean_edge(vertices, faces, keep):
+    """Mean length of the faces' edges whose midpoint passes keep(midpoint)."""
+    lengths = []
+    for f in faces:
+        for a, b in zip(f, f[1:] + f[:1]):
+            mid = [(p + q) / 2 for p, q in zip(vertices[a], vertices[b])]
+            if keep(mid):
+                lengths.append(sum((p - q) ** 2 for p, q in zip(vertices[a], vertices[b])) ** 0.5)
+    return sum(lengths) / len(lengths)
+
+
+def test_sizing(qgp, meshes, tmp):
+    """--adaptive and --density: bunny.off adaptive 1 within 5 % of 1 000 quads; painted 3 above its
+    median height, the quads there are shorter than below; a density file with the wrong count or a
+    word is refused, naming what is wrong."""
+    bunny = os.path.join(meshes, "bunny.off")
+    out = os.path.join(tmp, "sized.obj")
+    proc = run(qgp, "remesh", bunny, "-o", out, "--faces", 1000, "--adaptive", 1)
+    quads = sum(1 for line in open(out) if line.startswith("f ")) if proc.returncode == 0 else 0
+    check(abs(quads - 1000) <= 50, f"bunny --adaptive 1: {quads} quads, within 5 % of 1 000")
+    heights = sorted(v[2] for v in read_off_vertices(bunny))
+    middle = heights[len(heights) // 2]
+    density = os.path.join(tmp, "density.txt")
+    with open(density, "w") as f:
+        f.write("# bunny: 3 above the median height\n")
+        f.writelines("3\n" if v[2] > middle else "1\n" for v in read_off_vertices(bunny))
+    proc = run(qgp, "remesh", bunny, "-o", out, "--faces", 1000, "--density", density)
+    vertices, faces, _ = read_obj(out) if proc.returncode == 0 else ([], [], [])
+    ratio = (mean_edge(vertices, faces, lambda m: m[2] > middle) / mean_edge(vertices, faces, lambda m: m[2] < middle)
+             if faces else 1.0)
+    check(proc.returncode == 0 and ratio < 0.85 and abs(len(faces) - 1000) <= 50,
+          f"bunny --density (3 above the median): {len(faces)} quads, edges above / below {ratio:.2f}")
+    for content, expected in (("1\n2\n", "give one per vertex"), ("1\nmany\n", "line 2: expected a number")):
+        with open(density, "w") as f:
+            f.write(content)
+        proc = run(qgp, "remesh", bunny, "-o", out, "--density", density)
+        check(proc.returncode != 0 and expected in proc.stderr, f"density file {content!r}: refused ({expected})")
 
 
 def test_features(qgp, meshes, tmp):
@@ -340,7 +386,7 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
-                     test_quad_count, test_symmetry,
+                     test_quad_count, test_symmetry, test_sizing,
                      test_features, test_drop_bad_components, test_weld, test_partial, test_non_orientable_part):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):

@@ -164,6 +164,14 @@ TEST(CApi, OptionsAreValidated) {
   EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", "z"), QGP_ERR_INVALID_ARGUMENT);  // the grid is on z = 0
   EXPECT_NE(std::string(qgp_session_error(s)).find("positive side of z = 0"), std::string::npos);
   EXPECT_EQ(qgp_session_set_option_string(s, "symmetry", ""), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option(s, "adaptive", 0.5), QGP_OK);
+  EXPECT_EQ(qgp_session_set_option(s, "adaptive", 2), QGP_ERR_INVALID_ARGUMENT);
+  const double density[9] = {1, 1, 1, 2, 2, 2, 4, 4, 4}, bad_density[9] = {1, 1, 1, 1, 0, 1, 1, 1, 1};
+  EXPECT_EQ(qgp_session_set_density(s, density, 9), QGP_OK);
+  EXPECT_EQ(qgp_session_set_density(s, density, 8), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_session_error(s)).find("give one per vertex"), std::string::npos);
+  EXPECT_EQ(qgp_session_set_density(s, bad_density, 9), QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_EQ(qgp_session_set_density(s, nullptr, 0), QGP_OK);
   const int32_t good[4] = {0, 1, 1, 2}, bad[2] = {0, 100};
   EXPECT_EQ(qgp_session_set_features(s, good, 2), QGP_OK);
   EXPECT_EQ(qgp_session_set_features(s, bad, 1), QGP_ERR_INVALID_ARGUMENT);

@@ -72,7 +72,14 @@ QGP_API const char* qgp_session_error(qgp_session* session);
 /* Feature edges (e.g. Blender's marked-sharp edges): num_edges x 2 input vertex indices. */
 QGP_API int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t num_edges);
 
-/* Numeric options: "target_faces", "edge_length", "sharp_angle" (degrees, < 0 = off),
+/* Painted density: one positive value per input vertex, the linear quad density asked there (2:
+ * quads half as long; 1: the target; clamped to 1/16 .. 16); count 0 clears it. The quad count asked
+ * stays the total. */
+QGP_API int qgp_session_set_density(qgp_session* session, const double* values, int64_t count);
+
+/* Numeric options: "target_faces", "edge_length", "sharp_angle" (degrees, < 0 = off), "adaptive"
+ * (0 = uniform quads, default, to 1 = strongly curvature-adaptive: edge length following the radius
+ * of curvature within 4x either way of the typical one),
  * "drop_bad_components" (0/1: drop the parts intake cannot repair instead of refusing the mesh),
  * "weld_tolerance" (>= 0, relative to the bounding-box diagonal, default 1e-6: boundary vertices
  * this close are merged; 0 = no welding), "refuse_non_manifold" (0/1: refuse non-manifold edges

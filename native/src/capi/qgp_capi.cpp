@@ -198,6 +198,19 @@ int qgp_session_set_features(qgp_session* session, const int32_t* edges, int64_t
   });
 }
 
+int qgp_session_set_density(qgp_session* session, const double* values, int64_t count) {
+  return guarded(session, [&] {
+    require(session != nullptr, "session is null");
+    require(count >= 0, "count is negative");
+    require(count == 0 || values != nullptr, "values is null");
+    require_idle(session);
+    qgp::RemeshOptions options = session->session->options();
+    options.density.assign(values, values + count);
+    session->session->set_options(options);
+    return QGP_OK;
+  });
+}
+
 int qgp_session_set_option(qgp_session* session, const char* name, double value) {
   return guarded(session, [&] {
     require(session != nullptr, "session is null");
@@ -219,13 +232,15 @@ int qgp_session_set_option(qgp_session* session, const char* name, double value)
       options.weld_tolerance = value;
     } else if (key == "refuse_non_manifold") {
       options.refuse_non_manifold = value != 0;
+    } else if (key == "adaptive") {
+      options.adaptive = value;
     } else if (key == "fallback_uv_map") {
       options.fallback_uv_map = value != 0;
     } else {
       throw qgp::Error(qgp::ErrorCode::InvalidArgument, "unknown option '" + key +
                                                             "' (target_faces, edge_length, sharp_angle, "
                                                             "drop_bad_components, weld_tolerance, refuse_non_manifold, "
-                                                            "fallback_uv_map)");
+                                                            "fallback_uv_map, adaptive)");
     }
     session->session->set_options(options);
     return QGP_OK;
