@@ -121,3 +121,43 @@ def keep_source_attributes(obj, vertices, face_blocks, face_triangle, source_mes
         loop_uv = carry.corner_values(uv, source_mesh.triangle_loops, triangle[corners], weights[corners])
         layer = mesh.uv_layers.new(name=name)
         layer.data.foreach_set("uv", np.ascontiguousarray(loop_uv, np.float32).reshape(-1))
+
+
+def read_density(obj, mesh, group_name, color_name, factor):
+    """The painted density per vertex of `mesh` (object `obj`'s, evaluated or not): `factor` where the
+    vertex group `group_name` has weight 1 or the colour attribute `color_name` is white, geometric in
+    between (carry.painted_density; both: their product); None when neither is named. A name the
+    object does not have raises KeyError naming it."""
+    if not group_name and not color_name:
+        return None
+    density = np.ones(len(mesh.vertices))
+    if group_name:
+        group = obj.vertex_groups.get(group_name)
+        if group is None:
+            raise KeyError(f"the object has no vertex group '{group_name}' (Density Group)")
+        weights = np.zeros(len(mesh.vertices))
+        for v in mesh.vertices:
+            for g in v.groups:
+                if g.group == group.index:
+                    weights[v.index] = g.weight
+        density *= carry.painted_density(weights, factor)
+    if color_name:
+        density *= carry.painted_density(_color_weights(mesh, color_name), factor)
+    return density
+
+
+def _color_weights(mesh, name):
+    """Per vertex, the luminance of colour attribute `name` (a corner attribute averaged per vertex)."""
+    layer = mesh.attributes.get(name)
+    if layer is None or layer.data_type not in ("FLOAT_COLOR", "BYTE_COLOR") or layer.domain not in ("POINT", "CORNER"):
+        raise KeyError(f"the mesh has no point or corner colour attribute '{name}' (Density Colour)")
+    colors = np.empty(4 * len(layer.data), np.float32)
+    layer.data.foreach_get("color", colors)
+    weights = carry.luminance(colors.reshape(-1, 4))
+    if layer.domain == "POINT":
+        return weights
+    loop_vertices = np.empty(len(mesh.loops), np.int64)
+    mesh.loops.foreach_get("vertex_index", loop_vertices)
+    sums = np.bincount(loop_vertices, weights, minlength=len(mesh.vertices))
+    counts = np.bincount(loop_vertices, minlength=len(mesh.vertices))
+    return sums / np.maximum(counts, 1)

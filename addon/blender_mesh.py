@@ -82,10 +82,12 @@ class SourceMesh:
     """Arrays of a mesh object for the native library: vertices (object space), triangles, the
     loop of every triangle corner, the polygon of every triangle, and the feature edges (marked
     sharp, and the `guides`: see feature_edges). With keep_attributes, also the attributes carried
-    over to the quads (attributes.SourceAttributes; with keep_uvs, the active UV map too)."""
+    over to the quads (attributes.SourceAttributes; with keep_uvs, the active UV map too). density:
+    (vertex group name, colour attribute name, factor) of a painted density (attributes.read_density;
+    self.density is None when neither is named)."""
 
     def __init__(self, context, obj, evaluated, use_marked_sharp, guides=(), keep_attributes=False,
-                 keep_uvs=False):
+                 keep_uvs=False, density=("", "", 1.0)):
         if evaluated:
             evaluated_obj = obj.evaluated_get(context.evaluated_depsgraph_get())
             mesh = evaluated_obj.to_mesh()
@@ -103,6 +105,7 @@ class SourceMesh:
             self.features = feature_edges(mesh, use_marked_sharp, guides)
             self.attributes = (attributes.SourceAttributes(obj, mesh, keep_attributes, keep_uvs)
                                if keep_attributes or keep_uvs else None)
+            self.density = attributes.read_density(obj, mesh, *density)
         finally:
             if evaluated_obj is not None:
                 evaluated_obj.to_mesh_clear()

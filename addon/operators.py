@@ -204,6 +204,15 @@ DESCRIPTIONS = {
                        "attributes, taken from the nearest point on the source (materials are always kept)",
     "keep_source_uvs": "Give the quads the source's active UV map, taken from the nearest point on the "
                        "source for each face corner (stretched where a quad crosses a UV seam)",
+    "adaptive": "Smaller quads where the surface curves more, larger where it is flat: 0 is uniform, 1 "
+                "makes the edge length follow the radius of curvature (within 4x either way). The quad count "
+                "stays the total asked",
+    "density_group": "Vertex group painting the density: where its weight is 1 the quads are Density Factor "
+                     "times denser (along each edge), where it is 0 (or unpainted) as the target",
+    "density_color": "Colour attribute painting the density, as Density Group does with the colour's "
+                     "brightness (white: Density Factor times denser)",
+    "density_factor": "Linear quad density where the density map is fully painted (2: quads half as long; "
+                      "below 1: larger quads there)",
     "symmetry": "Mirror-symmetric quads about the object's own planes (its origin and local axes): the "
                 "positive side is remeshed, mirrored and welded on the plane; the other side of the source "
                 "is not used",
@@ -215,11 +224,25 @@ DESCRIPTIONS = {
 }
 
 
-def draw_density(layout, data):
-    """The density options of `data` (an operator or the panel's settings): target and its value."""
+def draw_density(layout, data, obj=None):
+    """The density options of `data` (an operator or the panel's settings): target and its value,
+    adaptive size and the painted density (vertex group and colour attribute chosen among `obj`'s
+    when given)."""
     layout.use_property_split = False
     layout.row().prop(data, "target_mode", expand=True)
     layout.prop(data, "target_faces" if data.target_mode == "FACES" else "edge_length")
+    layout.prop(data, "adaptive", slider=True)
+    col = layout.column(align=True)
+    mesh = obj.data if obj is not None and obj.type == "MESH" else None
+    if mesh is not None:
+        col.prop_search(data, "density_group", obj, "vertex_groups", text="", icon="GROUP_VERTEX")
+        col.prop_search(data, "density_color", mesh, "attributes", text="", icon="COLOR")
+    else:
+        col.prop(data, "density_group", text="", icon="GROUP_VERTEX")
+        col.prop(data, "density_color", text="", icon="COLOR")
+    sub = col.row(align=True)
+    sub.active = bool(data.density_group or data.density_color)
+    sub.prop(data, "density_factor")
 
 
 def draw_features(layout, data):
@@ -261,11 +284,11 @@ def draw_uv_output(layout, data):
     layout.prop(data, "mark_seams")
 
 
-def draw_section(layout, title, draw, data):
-    """A box headed `title` with the options `draw` puts in it (draw(layout, data))."""
+def draw_section(layout, title, draw, data, *args):
+    """A box headed `title` with the options `draw` puts in it (draw(layout, data, *args))."""
     box = layout.box()
     box.label(text=title)
-    draw(box.column(), data)
+    draw(box.column(), data, *args)
     return box
 
 
@@ -287,6 +310,14 @@ class TargetSettings:
     use_sharp_angle: flag("use_sharp_angle", "Sharp Angle", False)
     sharp_angle: bpy.props.FloatProperty(name="Angle", default=math.radians(40), min=0, max=math.pi,
                                          subtype="ANGLE", description=DESCRIPTIONS["sharp_angle"])
+    adaptive: bpy.props.FloatProperty(name="Adaptive Size", default=0.0, min=0.0, max=1.0, subtype="FACTOR",
+                                      description=DESCRIPTIONS["adaptive"])
+    density_group: bpy.props.StringProperty(name="Density Group", default="",
+                                            description=DESCRIPTIONS["density_group"])
+    density_color: bpy.props.StringProperty(name="Density Colour", default="",
+                                            description=DESCRIPTIONS["density_color"])
+    density_factor: bpy.props.FloatProperty(name="Density Factor", default=2.0, min=1 / 16, max=16,
+                                            description=DESCRIPTIONS["density_factor"])
     use_seams: flag("use_seams", "Seams", False)
     use_material_boundaries: flag("use_material_boundaries", "Material Boundaries", False)
     use_face_sets: flag("use_face_sets", "Face Sets", False)
@@ -304,9 +335,13 @@ class _TargetProperties(TargetSettings):
         _load_library(context)
         self._source_obj = _active_mesh_object(context)
         keep_attributes, keep_uvs = self._kept_of_source()
-        self._source = blender_mesh.SourceMesh(context, self._source_obj, evaluated=self._use_modifiers,
-                                               use_marked_sharp=self.use_marked_sharp, guides=self._guides(),
-                                               keep_attributes=keep_attributes, keep_uvs=keep_uvs)
+        try:
+            self._source = blender_mesh.SourceMesh(
+                context, self._source_obj, evaluated=self._use_modifiers, use_marked_sharp=self.use_marked_sharp,
+                guides=self._guides(), keep_attributes=keep_attributes, keep_uvs=keep_uvs,
+                density=(self.density_group, self.density_color, self.density_factor))
+        except KeyError as e:
+            raise binding.QGPError(binding.ERR_INVALID_ARGUMENT, e.args[0]) from None
         if len(self._source.triangles) == 0:
             raise binding.QGPError(binding.ERR_INVALID_MESH, "the mesh has no faces")
         angle = math.degrees(self.sharp_angle) if self.use_sharp_angle else -1.0
@@ -321,6 +356,8 @@ class _TargetProperties(TargetSettings):
         session.set_option("fallback_uv_map", 1 if self._wants_fallback_map() else 0)
         session.set_option("weld_tolerance", _WELD_TOLERANCE if self.weld else 0.0)
         session.set_option_string("symmetry", self._symmetry())
+        session.set_option("adaptive", self.adaptive)
+        session.set_density(self._source.density)
         return session
 
     def _symmetry(self):
@@ -359,7 +396,9 @@ class _TargetProperties(TargetSettings):
             return {"CANCELLED"}
 
     def _draw_target(self, layout):
-        draw_section(layout, "Density", draw_density, self)
+        # The density maps are the source's: after a run the active object is the new one.
+        source = getattr(self, "_source_obj", None) or bpy.context.active_object
+        draw_section(layout, "Density", draw_density, self, source)
         draw_section(layout, "Features", draw_features, self)
 
 

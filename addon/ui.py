@@ -54,7 +54,7 @@ class VIEW3D_PT_qgp_density(_RetopoSidebar, bpy.types.Panel):
     bl_parent_id = "VIEW3D_PT_qgp_retopo"
 
     def draw(self, context):
-        draw_density(self.layout.column(), context.scene.qgp_settings)
+        draw_density(self.layout.column(), context.scene.qgp_settings, context.active_object)
 
 
 class VIEW3D_PT_qgp_features(_RetopoSidebar, bpy.types.Panel):

@@ -32,6 +32,18 @@ def is_carried(name, domain, data_type, uv_names=()):
     return domain in ("POINT", "FACE") or (domain == "CORNER" and data_type in COLOR_TYPES)
 
 
+def painted_density(weights, factor):
+    """The linear quad density per vertex from painted weights in [0, 1] (clamped): `factor` where the
+    weight is 1, 1 (the target) where it is 0, geometric in between."""
+    return np.power(float(factor), np.clip(np.asarray(weights, np.float64), 0.0, 1.0))
+
+
+def luminance(rgb):
+    """Rec. 709 luminance of colours (n, 3+), the painted weight of a colour attribute."""
+    rgb = np.asarray(rgb, np.float64)
+    return rgb[:, 0] * 0.2126 + rgb[:, 1] * 0.7152 + rgb[:, 2] * 0.0722
+
+
 def barycentric_weights(points, a, b, c):
     """Barycentric weights (n,3) of `points` (n,3) in the triangles (a, b, c) (each (n,3)), of the
     point's projection onto the triangle's plane, clamped into the triangle (negative weights set

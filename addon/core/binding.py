@@ -89,6 +89,7 @@ def _declare(lib):
         "qgp_session_free": (None, [vp]),
         "qgp_session_error": (c_char_p, [vp]),
         "qgp_session_set_features": (c_int, [vp, p_int32, c_int64]),
+        "qgp_session_set_density": (c_int, [vp, p_double, c_int64]),
         "qgp_session_set_option": (c_int, [vp, c_char_p, c_double]),
         "qgp_session_set_option_string": (c_int, [vp, c_char_p, c_char_p]),
         "qgp_job_start": (c_int, [vp, c_int]),
@@ -253,6 +254,11 @@ class Session(SessionLifetime):
     def set_features(self, edges):
         e = np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)
         self._check(self._lib.qgp_session_set_features(self._handle, _ptr(e, ctypes.c_int32), len(e)))
+
+    def set_density(self, density):
+        """The linear quad density per input vertex (2: quads half as long there); None clears it."""
+        d = np.ascontiguousarray(density if density is not None else [], dtype=np.float64).reshape(-1)
+        self._check(self._lib.qgp_session_set_density(self._handle, _ptr(d, ctypes.c_double), len(d)))
 
     # -- jobs --
     def start(self, job):

@@ -182,6 +182,9 @@ class WorkerSession(binding.SessionLifetime):
     def set_features(self, edges):
         self._call("set_features", edges)
 
+    def set_density(self, density):
+        self._call("set_density", density)
+
     def start(self, job):
         self._call("start", job)
 

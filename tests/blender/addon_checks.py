@@ -517,3 +517,50 @@ def run_symmetry(source, axes, target):
     assert figures["flipped_quads"] == 0, figures
     assert mesh_data_state(source) == before, "the source changed"
     return count, check_symmetric(quad, axes)
+
+
+def mean_quad_edge(quad, keep):
+    """Mean length of the quad object's edges whose midpoint (object space) passes keep(midpoint)."""
+    mesh = quad.data
+    lengths = [(mesh.vertices[a].co - mesh.vertices[b].co).length for a, b in (e.vertices for e in mesh.edges)
+               if keep((mesh.vertices[a].co + mesh.vertices[b].co) / 2)]
+    return sum(lengths) / len(lengths)
+
+
+def painted_sphere():
+    """A UV sphere whose upper half (z > 0) is painted: weight 1 in the vertex group 'detail' and white
+    in the point colour attribute 'paint' (black below)."""
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32)
+    obj = bpy.context.active_object
+    group = obj.vertex_groups.new(name="detail")
+    group.add([v.index for v in obj.data.vertices if v.co.z > 0], 1.0, "REPLACE")
+    paint = obj.data.attributes.new("paint", "FLOAT_COLOR", "POINT")
+    colors = [((1.0,) * 3 if v.co.z > 0 else (0.0,) * 3) + (1.0,) for v in obj.data.vertices]
+    paint.data.foreach_set("color", [c for color in colors for c in color])
+    return obj
+
+
+def run_density(source, target=800, factor=4.0):
+    """Quantized Retopo on a painted_sphere with its group, then its colour attribute, as the density
+    map (Density Factor `factor`): each time the quads above are shorter than below (ratio < 0.8),
+    the count within 5 %, the source unchanged. A density map the object does not have is refused by
+    name. Returns the two edge length ratios (above / below)."""
+    before = mesh_data_state(source)
+    ratios = []
+    for option in ("density_group", "density_color"):
+        name = "detail" if option == "density_group" else "paint"
+        quad = run_quad_remesh(source, target_faces=target, density_factor=factor, keep_source_visible=True,
+                               **{option: name})
+        ratio = mean_quad_edge(quad, lambda m: m.z > 0.3) / mean_quad_edge(quad, lambda m: m.z < -0.3)
+        count = len(quad.data.polygons)
+        assert ratio < 0.8 and abs(count - target) <= 0.05 * target, (option, ratio, count)
+        ratios.append(ratio)
+        bpy.data.objects.remove(quad)
+    select_only(source)
+    try:
+        bpy.ops.object.qgp_quad_remesh(target_faces=target, density_group="no such group")
+        raise AssertionError("a missing density group was not refused")
+    except RuntimeError as e:
+        assert "no vertex group 'no such group'" in str(e), e
+    assert mesh_data_state(source) == before, "the source changed"
+    return ratios

@@ -405,6 +405,32 @@ def test_symmetry():
               f"{error:.1e} of the diagonal, welded")
 
 
+def test_density():
+    """Adaptive Size (0 by default) and the painted density (Density Group / Density Colour, none by
+    default): a sphere stretched to an ellipsoid gets shorter edges at its tips with Adaptive Size 1
+    than with 0; a sphere painted on its upper half gets shorter edges there, by vertex group and by
+    colour attribute; a missing map is refused by name."""
+    properties = bpy.ops.object.qgp_quad_remesh.get_rna_type().properties
+    assert properties["adaptive"].default == 0 and properties["density_group"].default == ""
+    reset_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32)
+    ellipsoid = bpy.context.active_object
+    ellipsoid.scale = (1, 1, 3)
+    bpy.ops.object.transform_apply(scale=True)
+    ratios = []
+    for adaptive in (0.0, 1.0):
+        quad = run_quad_remesh(ellipsoid, target_faces=800, adaptive=adaptive, keep_source_visible=True)
+        ratios.append(addon_checks.mean_quad_edge(quad, lambda m: abs(m.z) > 2.5) /
+                      addon_checks.mean_quad_edge(quad, lambda m: abs(m.z) < 1.0))
+        bpy.data.objects.remove(quad)
+    assert ratios[1] < 0.85 * ratios[0], ratios
+    print(f"adaptive size: ellipsoid tips / middle edge length {ratios[0]:.2f} (0) -> {ratios[1]:.2f} (1)")
+    reset_scene()
+    group, color = addon_checks.run_density(addon_checks.painted_sphere())
+    print(f"painted density 4 on the upper half: edges above / below {group:.2f} (vertex group), "
+          f"{color:.2f} (colour attribute)")
+
+
 def test_show_layout():
     """Show Layout (off by default): beside the quads, an object '<name>_layout' of edges only with
     the source's transform: exactly the native session's layout lines (the T-mesh, traced on the
@@ -460,6 +486,10 @@ class RecordingLayout:
         assert name in data.bl_rna.properties, (data, name)
         assert not self._split(), f"{name} drawn with property split"
         self.drawn.append(name)
+
+    def prop_search(self, data, name, search_data, search_name, **kwargs):
+        assert search_name in search_data.bl_rna.properties, (search_data, search_name)
+        self.prop(data, name)
 
     def label(self, text="", **kwargs):
         assert text, "an empty label"
@@ -778,7 +808,7 @@ def main():
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
              (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_symmetry, ()),
-             (test_panel_draws, ()),
+             (test_density, ()), (test_panel_draws, ()),
              (test_show_layout, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),

@@ -140,6 +140,13 @@ def test_symmetry():
         print(f"symmetry {axes.upper()} on {source.name}: {count} quads, mirror images within {error:.1e}, welded")
 
 
+def test_painted_density():
+    """The painted density on this Blender's attribute API (as test_addon.py checks it in 3.4)."""
+    reset_scene()
+    group, color = addon_checks.run_density(addon_checks.painted_sphere())
+    print(f"painted density: edges above / below {group:.2f} (vertex group), {color:.2f} (colour attribute)")
+
+
 def test_batch():
     """The installed extension's batch script, run by this interpreter (the module has no Blender
     binary: bpy.app.binary_path is empty): it registers the add-on from its own folder, with the
@@ -175,6 +182,7 @@ def main():
         test_operators(binding)
         test_guides_and_attributes()
         test_symmetry()
+        test_painted_density()
         test_batch()
         bpy.ops.preferences.addon_disable(module=PACKAGE)
         assert not hasattr(bpy.types, "OBJECT_OT_qgp_quad_remesh"), "the add-on did not unregister"
