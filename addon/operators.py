@@ -232,14 +232,15 @@ def draw_density(layout, data, obj=None):
     layout.row().prop(data, "target_mode", expand=True)
     layout.prop(data, "target_faces" if data.target_mode == "FACES" else "edge_length")
     layout.prop(data, "adaptive", slider=True)
+    layout.label(text="Painted Density")
     col = layout.column(align=True)
     mesh = obj.data if obj is not None and obj.type == "MESH" else None
     if mesh is not None:
-        col.prop_search(data, "density_group", obj, "vertex_groups", text="", icon="GROUP_VERTEX")
-        col.prop_search(data, "density_color", mesh, "attributes", text="", icon="COLOR")
+        col.prop_search(data, "density_group", obj, "vertex_groups", text="Group", icon="GROUP_VERTEX")
+        col.prop_search(data, "density_color", mesh, "attributes", text="Colour", icon="COLOR")
     else:
-        col.prop(data, "density_group", text="", icon="GROUP_VERTEX")
-        col.prop(data, "density_color", text="", icon="COLOR")
+        col.prop(data, "density_group", text="Group", icon="GROUP_VERTEX")
+        col.prop(data, "density_color", text="Colour", icon="COLOR")
     sub = col.row(align=True)
     sub.active = bool(data.density_group or data.density_color)
     sub.prop(data, "density_factor")
