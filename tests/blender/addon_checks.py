@@ -486,18 +486,23 @@ def check_symmetric(quad, axes):
 SYMMETRY_CASES = (("x", 1200), ("xz", 800))
 
 
+def moved_suzanne():
+    """Suzanne subdivided once (the modifier applied), moved and turned away from the origin."""
+    bpy.ops.mesh.primitive_monkey_add()
+    monkey = bpy.context.active_object
+    monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
+    bpy.ops.object.modifier_apply(modifier="subsurf")
+    monkey.location = (1.5, -2.0, 0.25)
+    monkey.rotation_euler = (0.3, 0.0, 1.1)
+    bpy.context.view_layer.update()
+    return monkey
+
+
 def symmetry_source(axes):
-    """The source of a SYMMETRY_CASES test: for "x" Suzanne (subdivided once, moved and turned: the
-    planes are the object's own), else a UV sphere."""
+    """The source of a SYMMETRY_CASES test: for "x" moved_suzanne (the planes are the object's own,
+    not the world's), else a UV sphere."""
     if axes == "x":
-        bpy.ops.mesh.primitive_monkey_add()
-        monkey = bpy.context.active_object
-        monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
-        bpy.ops.object.modifier_apply(modifier="subsurf")
-        monkey.location = (1.5, -2.0, 0.25)
-        monkey.rotation_euler = (0.3, 0.0, 1.1)
-        bpy.context.view_layer.update()
-        return monkey
+        return moved_suzanne()
     bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24)
     return bpy.context.active_object
 

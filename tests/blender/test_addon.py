@@ -236,14 +236,7 @@ def test_quad_remesh(binding):
     part with the angle option: a new all-quad object next to an untouched source, with the
     source's name, transform, collection and materials."""
     reset_scene()
-    bpy.ops.mesh.primitive_monkey_add()
-    monkey = bpy.context.active_object
-    monkey.modifiers.new("subsurf", "SUBSURF").levels = 1
-    bpy.ops.object.modifier_apply(modifier="subsurf")
-    monkey.location = (1.5, -2.0, 0.25)
-    monkey.rotation_euler = (0.3, 0.0, 1.1)
-    bpy.context.view_layer.update()
-    cases = [(monkey, 1200, {})]
+    cases = [(addon_checks.moved_suzanne(), 1200, {})]
     bpy.ops.mesh.primitive_torus_add(major_segments=64, minor_segments=24)
     cases.append((bpy.context.active_object, 600, {}))
     cases.append((import_mesh(binding, "camelhead.off"), 2000, {}))  # open: a boundary loop
