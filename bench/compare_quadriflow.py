@@ -80,12 +80,22 @@ def _load_batch():
 
 # addon/batch.py: the add-on loader and the Blender object helpers shared with the batch command.
 batch = _load_batch()
-new_object, activate, write_obj = batch.new_object, batch.activate, batch.write_obj
+activate, write_obj = batch.activate, batch.write_obj
+
+
+def new_object(name, vertices, polygons):
+    """A new object linked to the scene from vertex positions and polygons (vertex index lists)."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices, [], polygons)
+    mesh.update(calc_edges=True)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
 
 
 def load_addon():
-    """This repository's add-on, registered by addon/batch.py's loader."""
-    return batch.load_addon()
+    """This repository's add-on, registered by addon/batch.py's loader (the package)."""
+    return batch.load_addon()[0]
 
 
 def read_input(binding, path):
