@@ -116,7 +116,8 @@ QGP_API int qgp_report_json(qgp_session* session, char* buffer, int64_t buffer_s
 
 /* The repaired mesh of the last intake: vertex and triangle counts, then the arrays
  * (vertices: nv x 3 doubles; triangles: nf x 3; component: nf component ids;
- *  input_vertex: nv input indices). Any array pointer may be null. */
+ *  input_vertex: nv input indices). Any array pointer may be null. With symmetry this is the
+ * positive half: input_vertex is -1 for a vertex the cut made. */
 QGP_API int qgp_intake_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
                               int64_t* num_components);
 QGP_API int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles, int32_t* component,

@@ -378,7 +378,9 @@ int qgp_intake_fetch(qgp_session* session, double* vertices, int32_t* triangles,
     if (component)
       for (size_t c = 0; c < intake->components.size(); ++c)
         for (int f : intake->components[c].faces) component[f] = static_cast<int32_t>(c);
-    if (input_vertex) std::copy(intake->input_vertex.begin(), intake->input_vertex.end(), input_vertex);
+    if (input_vertex)
+      for (size_t v = 0; v < intake->input_vertex.size(); ++v)
+        input_vertex[v] = session->session->input_vertex_of(static_cast<int>(v));
     return QGP_OK;
   });
 }

@@ -117,6 +117,11 @@ std::vector<double> Session::component_face_sizes(const ComponentState& state) c
   return face_sizes(state.mesh, state.feature_edges, sizing);
 }
 
+int Session::input_vertex_of(int intake_vertex) const {
+  const int v = intake_->input_vertex[intake_vertex];
+  return half_ ? half_->input_vertex[v] : v;
+}
+
 double Session::asked_quads() const {
   const double faces = options_.target_faces > 0 ? options_.target_faces : RemeshOptions::kDefaultTargetFaces;
   return faces / options_.symmetry.copies();

@@ -36,6 +36,10 @@ class Session {
 
   const Json& report() const { return report_; }
   const IntakeResult* intake() const { return intake_.get(); }
+  // The input face an intake face comes from, and the input vertex of an intake vertex (through the
+  // half when symmetry is asked: -1 for a vertex the cut made).
+  int input_face_of(int intake_face) const;
+  int input_vertex_of(int intake_vertex) const;
   const PolygonSoup& input() const { return input_; }
   const std::vector<ComponentState>& components() const { return components_; }
 
@@ -61,8 +65,6 @@ class Session {
  private:
   // What intake reads: the input, or its positive half when symmetry is asked.
   const PolygonSoup& intake_input() const { return half_ ? half_->soup : input_; }
-  // The input face an intake face comes from (through the half when symmetry is asked).
-  int input_face_of(int intake_face) const;
   // The quad count asked for the part intake reads (the whole count over the symmetric copies).
   double asked_quads() const;
   // The sizing field on the component's mesh (options adaptive and density), #F or empty.
