@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "intake/read_mesh_file.h"
 #include "metrics/polygon_metrics.h"
+#include "pipeline/layout_lines.h"
 #include "pipeline/session.h"
 #include "symmetry/symmetry.h"
 #include "test_support.h"
@@ -233,6 +234,13 @@ TEST(SymmetrySession, RefusalsNameTheCauseAndTurningItOffRestores) {
   }
   session.run(Job::Remesh, progress);
   EXPECT_TRUE(session.report().contains("symmetry"));
+  // The layout shown (Show Layout) is mirrored like the quads: every point's image is a point.
+  const LayoutLines lines = compose_layout_lines(session);
+  ASSERT_GT(lines.segments.size(), 0u);
+  EXPECT_EQ(lines.segments.size() % 2, 0u);
+  std::set<std::array<double, 3>> points;
+  for (const Vec3& p : lines.points) points.insert({p.x(), p.y(), p.z()});
+  for (const Vec3& p : lines.points) EXPECT_TRUE(points.count({-p.x(), p.y(), p.z()}));
   options.symmetry = SymmetryAxes();
   session.set_options(options);
   session.run(Job::Remesh, progress);

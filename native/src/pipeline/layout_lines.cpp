@@ -39,6 +39,20 @@ void append_tmesh(LayoutLines& lines, const TriMesh& mesh, const TMesh& tmesh) {
   for (const TMeshEdge& e : tmesh.edges) append_edge(lines, mesh, tmesh, e, node_base);
 }
 
+// The lines mirrored across each plane of the symmetry asked (the layout is the positive half's).
+void append_mirror_images(LayoutLines& lines, const SymmetryAxes& axes) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!axes.axis[axis]) continue;
+    const int n = static_cast<int>(lines.points.size()), m = static_cast<int>(lines.segments.size());
+    for (int i = 0; i < n; ++i) {
+      Vec3 image = lines.points[i];
+      image[axis] = -image[axis];
+      lines.points.push_back(image);
+    }
+    for (int s = 0; s < m; ++s) lines.segments.push_back({lines.segments[s][0] + n, lines.segments[s][1] + n});
+  }
+}
+
 }  // namespace
 
 LayoutLines compose_layout_lines(const Session& session) {
@@ -46,6 +60,7 @@ LayoutLines compose_layout_lines(const Session& session) {
   LayoutLines lines;
   for (const auto& c : session.components())
     if (!c.failure) append_tmesh(lines, c.mesh, c.traced->tmesh);
+  append_mirror_images(lines, session.options().symmetry);
   return lines;
 }
 

@@ -19,8 +19,8 @@ struct LayoutLines {
 bool has_layout(const Session& session);
 
 // The T-mesh edges of every component (but those kept as triangles) as segments over their nodes
-// and the points of their paths (consecutive duplicates skipped, as write_layout_obj does). Throws
-// Error(NotReady) if has_layout is false.
+// and the points of their paths (consecutive duplicates skipped, as write_layout_obj does), with
+// symmetry mirrored across its planes like the quads. Throws Error(NotReady) if has_layout is false.
 LayoutLines compose_layout_lines(const Session& session);
 
 }  // namespace qgp
