@@ -24,16 +24,10 @@ namespace {
 // (where extraction started the quad) can lie a quad's half-diagonal away, across a material split.
 std::vector<int> intake_faces_under_quad_centres(const QuadMesh& part, const ComponentState& state) {
   const bool full = state.full_mesh.has_value();
-  const TriMesh& surface = full ? *state.full_mesh : state.mesh;
   const std::vector<int>& face_map = full ? state.full_face_map : state.face_map;
-  const TriangleBvh bvh(surface);
-  std::vector<int> faces(part.num_quads(), -1);
-  for (int q = 0; q < part.num_quads(); ++q) {
-    Vec3 centre = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) centre += part.V.row(part.Q(q, k)).transpose();
-    const int f = bvh.closest_point(centre / 4).triangle;
-    if (f >= 0 && f < static_cast<int>(face_map.size())) faces[q] = face_map[f];
-  }
+  std::vector<int> faces =
+      triangles_under_centres<4>(part.V, part.Q, TriangleBvh(full ? *state.full_mesh : state.mesh));
+  for (int& f : faces) f = f >= 0 && f < static_cast<int>(face_map.size()) ? face_map[f] : -1;
   return faces;
 }
 
@@ -484,6 +478,7 @@ void Session::collect_quads(Progress& progress) {
     if (state.failure) continue;
     const QuadMesh& part = state.quads->extraction.quads;
     append_quad_mesh(*quads_, part, static_cast<int>(c));
+    if (half_) continue;  // mirror_results finds every quad's face on the whole input
     for (const int f : intake_faces_under_quad_centres(part, state))
       quad_source_face_.push_back(f < 0 ? -1 : input_face_of(f));
   }

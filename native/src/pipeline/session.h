@@ -105,7 +105,6 @@ class Session {
 
   PolygonSoup input_;
   std::unique_ptr<HalfSoup> half_;  // the positive half intake reads, when symmetry is asked
-  MirrorStats mirror_stats_;
   RemeshOptions options_;
   std::unique_ptr<IntakeResult> intake_;
   std::vector<ComponentState> components_;

@@ -29,14 +29,14 @@ template <int K>
 std::vector<int> input_faces_under_centres(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
                                            const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces,
                                            const TriangleBvh& bvh, const std::vector<int>& triangle_face) {
-  std::vector<int> source_face(faces.rows(), -1);
-  for (int f = 0; f < faces.rows(); ++f) {
-    Vec3 centre = Vec3::Zero();
-    for (int k = 0; k < K; ++k) centre += V.row(faces(f, k)).transpose();
-    const int t = bvh.closest_point(centre / K).triangle;
-    if (t >= 0) source_face[f] = triangle_face[t];
-  }
+  std::vector<int> source_face = triangles_under_centres<K>(V, faces, bvh);
+  for (int& f : source_face) f = f < 0 ? -1 : triangle_face[f];
   return source_face;
+}
+
+// Quad or triangle boundary vertices this close to a plane are welded to their mirror image.
+double weld_tolerance(const IntakeResult& intake) {
+  return kSymmetryWeldTolerance * intake.mesh.bounding_box_diagonal();
 }
 
 template <class T>
@@ -50,14 +50,14 @@ std::vector<T> copied_by_origin(const std::vector<T>& values, const std::vector<
 }  // namespace
 
 void Session::mirror_results() {
-  const double tolerance = kSymmetryWeldTolerance * intake_->mesh.bounding_box_diagonal();
+  const double tolerance = weld_tolerance(*intake_);
   std::vector<int> triangle_face;
   const TriangleBvh input_faces = input_face_bvh(input_, triangle_face);
   QuadMesh& quads = *quads_;
   const int half_quads = quads.num_quads();
   const bool has_components = quads.component.size() == static_cast<size_t>(quads.num_quads());
   std::vector<int> origin;
-  mirror_stats_ = mirror_across_planes<4>(quads.V, quads.Q, options_.symmetry, tolerance, origin);
+  const MirrorStats mirrored = mirror_across_planes<4>(quads.V, quads.Q, options_.symmetry, tolerance, origin);
   if (has_components) quads.component = copied_by_origin(quads.component, origin);
   quads.vertex_face.clear(), quads.vertex_singular.clear();  // the copies have no working-mesh face
   // Every quad's source face from the whole input (doublets merged across the plane move quads).
@@ -76,16 +76,15 @@ void Session::mirror_results() {
                          {"cut_faces", half_->cut_faces},
                          {"dropped_faces", half_->dropped_faces},
                          {"snapped_vertices", half_->snapped_vertices},
-                         {"welded_vertices", mirror_stats_.welded_vertices},
-                         {"dissolved_doublets", mirror_stats_.dissolved_doublets},
-                         {"open_edges_on_plane", mirror_stats_.open_edges_on_plane}};
+                         {"welded_vertices", mirrored.welded_vertices},
+                         {"dissolved_doublets", mirrored.dissolved_doublets},
+                         {"open_edges_on_plane", mirrored.open_edges_on_plane}};
 }
 
 void Session::mirror_kept_triangles(const TriangleBvh& input_faces, const std::vector<int>& triangle_face) {
   TriMesh& kept = *kept_triangles_;
   std::vector<int> origin;
-  mirror_across_planes<3>(kept.V, kept.F, options_.symmetry,
-                          kSymmetryWeldTolerance * intake_->mesh.bounding_box_diagonal(), origin);
+  mirror_across_planes<3>(kept.V, kept.F, options_.symmetry, weld_tolerance(*intake_), origin);
   kept_component_ = copied_by_origin(kept_component_, origin);
   kept_source_face_ = input_faces_under_centres<3>(kept.V, kept.F, input_faces, triangle_face);
 }
@@ -95,8 +94,7 @@ TriMesh Session::mirrored_reference(const TriMesh& reference, std::vector<int>& 
   whole.V = reference.V;
   whole.F = reference.F;
   std::vector<int> origin;
-  mirror_across_planes<3>(whole.V, whole.F, options_.symmetry,
-                          kSymmetryWeldTolerance * intake_->mesh.bounding_box_diagonal(), origin);
+  mirror_across_planes<3>(whole.V, whole.F, options_.symmetry, weld_tolerance(*intake_), origin);
   component_of = copied_by_origin(component_of, origin);
   return whole;
 }

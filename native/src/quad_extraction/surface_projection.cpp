@@ -133,6 +133,26 @@ TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
   return best;
 }
 
+template <int K>
+std::vector<int> triangles_under_centres(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
+                                         const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces,
+                                         const TriangleBvh& bvh) {
+  std::vector<int> triangles(faces.rows(), -1);
+  for (int f = 0; f < faces.rows(); ++f) {
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < K; ++k) centre += V.row(faces(f, k)).transpose();
+    triangles[f] = bvh.closest_point(centre / K).triangle;
+  }
+  return triangles;
+}
+
+template std::vector<int> triangles_under_centres<3>(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>&,
+                                                     const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>&,
+                                                     const TriangleBvh&);
+template std::vector<int> triangles_under_centres<4>(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>&,
+                                                     const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>&,
+                                                     const TriangleBvh&);
+
 void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progress) {
   const TriangleBvh bvh(target);
   quads.vertex_face.assign(quads.V.rows(), -1);

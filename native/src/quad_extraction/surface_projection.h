@@ -46,6 +46,13 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 // Distance from p to segment [a, b] (a point when a == b).
 double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
 
+// Per face of a polygon mesh (V, faces of K corners), the triangle of `bvh` nearest the mean of
+// its corners (-1 for an empty surface). K is 3 or 4.
+template <int K>
+std::vector<int> triangles_under_centres(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
+                                         const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces,
+                                         const TriangleBvh& bvh);
+
 // Moves every quad vertex onto its closest point of `target` (the original, finer surface) and
 // sets vertex_face to the target triangle.
 void project_to_surface(QuadMesh& quads, const TriMesh& target, Progress& progress);

@@ -10,21 +10,28 @@ namespace {
 
 constexpr int kDensitySmoothingRounds = 5;
 
-// Per vertex, the surface's bending around it: the sum over its non-feature edges of the dihedral
-// angle times the edge length, per unit of the vertex's area (a third of its faces'): about 3.5 / r
-// on a sphere of radius r, 0 on a plane.
-std::vector<double> vertex_curvature(const TriMesh& mesh, const std::vector<char>& feature_edges) {
-  const int nv = mesh.num_vertices();
-  std::vector<double> bending(nv, 0.0), area(nv, 0.0);
+// Per vertex, a third of the area of its faces.
+std::vector<double> vertex_areas(const TriMesh& mesh) {
+  std::vector<double> area(mesh.num_vertices(), 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const double a = 0.5 * mesh.face_normal_unnormalized(f).norm();
     for (int k = 0; k < 3; ++k) area[mesh.F(f, k)] += a / 3;
   }
+  return area;
+}
+
+// Per vertex, the surface's bending around it: the sum over its non-feature edges of the dihedral
+// angle times the edge length, per unit of the vertex's area: about 3.5 / r on a sphere of radius
+// r, 0 on a plane.
+std::vector<double> vertex_curvature(const TriMesh& mesh, const std::vector<char>& feature_edges,
+                                     const std::vector<double>& area) {
+  const int nv = mesh.num_vertices();
+  std::vector<double> bending(nv, 0.0);
   for (int e = 0; e < mesh.num_edges(); ++e) {
     const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
     if (o < 0 || (!feature_edges.empty() && feature_edges[e])) continue;
-    const Vec3 n0 = mesh.face_normal_unnormalized(TriMesh::face(h)),
-               n1 = mesh.face_normal_unnormalized(TriMesh::face(o));
+    const Vec3 n0 = mesh.face_normal_unnormalized(TriMesh::face(h));
+    const Vec3 n1 = mesh.face_normal_unnormalized(TriMesh::face(o));
     if (!(n0.norm() > 0) || !(n1.norm() > 0)) continue;
     const double angle = std::atan2(n0.cross(n1).norm(), n0.dot(n1));
     const double b = angle * mesh.edge_vector(h).norm();
@@ -53,16 +60,11 @@ std::vector<double> smoothed(const TriMesh& mesh, std::vector<double> values, in
 // Per vertex, the curvature's edge-length multiple: (curvature / typical)^-adaptive, the ratio
 // clamped to kMaxCurvatureRatio either way; typical is the area-weighted median curvature.
 std::vector<double> curvature_sizes(const TriMesh& mesh, const std::vector<char>& feature_edges, double adaptive) {
-  const std::vector<double> curvature = smoothed(mesh, vertex_curvature(mesh, feature_edges), 3);
+  const std::vector<double> area = vertex_areas(mesh);
+  const std::vector<double> curvature = smoothed(mesh, vertex_curvature(mesh, feature_edges, area), 3);
   std::vector<std::pair<double, double>> weighted;  // (curvature, area) per vertex
-  std::vector<double> area(mesh.num_vertices(), 0.0);
   double total = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const double a = 0.5 * mesh.face_normal_unnormalized(f).norm();
-    for (int k = 0; k < 3; ++k) area[mesh.F(f, k)] += a / 3;
-    total += a;
-  }
-  for (int v = 0; v < mesh.num_vertices(); ++v) weighted.push_back({curvature[v], area[v]});
+  for (int v = 0; v < mesh.num_vertices(); ++v) weighted.push_back({curvature[v], area[v]}), total += area[v];
   std::sort(weighted.begin(), weighted.end());
   double typical = 0, accumulated = 0;
   for (const auto& [c, a] : weighted)

@@ -182,12 +182,19 @@ uint64_t edge_key(int a, int b) {
   return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
 }
 
+// How many faces use each edge (by edge_key).
 template <int K>
-std::vector<char> boundary_vertices(int num_vertices,
-                                    const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces) {
+std::unordered_map<uint64_t, int> edge_uses(const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces) {
   std::unordered_map<uint64_t, int> uses;
   for (int f = 0; f < faces.rows(); ++f)
     for (int k = 0; k < K; ++k) ++uses[edge_key(faces(f, k), faces(f, (k + 1) % K))];
+  return uses;
+}
+
+template <int K>
+std::vector<char> boundary_vertices(int num_vertices,
+                                    const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces) {
+  std::unordered_map<uint64_t, int> uses = edge_uses<K>(faces);
   std::vector<char> boundary(num_vertices, 0);
   for (int f = 0; f < faces.rows(); ++f)
     for (int k = 0; k < K; ++k)
@@ -286,11 +293,8 @@ template <int K>
 int open_edges_on_planes(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& V,
                          const Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>& faces, const SymmetryAxes& axes,
                          double tolerance) {
-  std::unordered_map<uint64_t, int> uses;
-  for (int f = 0; f < faces.rows(); ++f)
-    for (int k = 0; k < K; ++k) ++uses[edge_key(faces(f, k), faces(f, (k + 1) % K))];
   int open = 0;
-  for (const auto& [key, count] : uses) {
+  for (const auto& [key, count] : edge_uses<K>(faces)) {
     if (count != 1) continue;
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
     for (int axis = 0; axis < 3; ++axis)
