@@ -245,6 +245,10 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
   repair_nonmanifold_edges(soup, options, result);
   progress.update(0.35);
   repair_orientation_and_shape(soup, options, result);
+  if (soup.triangles.empty() && result.non_orientable_parts.empty())
+    throw Error(ErrorCode::InvalidMesh, "every face of the mesh has zero area (all " +
+                                            std::to_string(input.num_faces()) +
+                                            " were removed): no surface is left to remesh");
   progress.update(0.7);
   build_result_mesh(soup, result);
   classify_components(result);
