@@ -113,6 +113,8 @@ def process(binding, blender_mesh, path, args):
             entry["reason"] = f"{figures['kept_parts']} part(s) kept as {figures['kept_triangles']} triangles"
         else:  # the operator selects the quads that face against the source surface
             entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
+            if figures.get("rescued_parts", 0):
+                entry["reason"] = f"{figures['rescued_parts']} part(s) quadded finer or by splitting their triangles"
         write_obj(os.path.join(args.out, name + ".obj"), result)
         if args.uv:
             activate(source)

@@ -76,7 +76,7 @@ def _report_figures(report, op, started, **figures):
 
 
 def _failed_parts(failed, shown=3):
-    """The parts a remesh kept as triangles, named with why (the first `shown` of them)."""
+    """The parts a remesh kept as triangles or rescued, named with why (the first `shown` of them)."""
     names = [f"part {f['component']} ({f['stage']}: {f['message']})" for f in failed[:shown]]
     more = f"; {len(failed) - shown} more in the report" if len(failed) > shown else ""
     return "; ".join(names) + more
@@ -86,18 +86,23 @@ def _quad_figures(report):
     """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
     has exactly), count_note (why it is more than 5 % off the count asked, or ""), where each
     component's quads come from (quad_paths: 'integer-grid map' or
-    'T-mesh layout (why)', or 'kept as triangles'), how many components used the layout, the parts kept
-    as triangles (kept_parts, kept_triangles: added after the quads), the planes the quads are
-    mirror-symmetric about (symmetry: "", "x", "xz", ...) and the quality figures."""
+    'T-mesh layout (why)', 'rescued: split triangles' or 'rescued: finer density' for a part whose
+    layout gave no quads, or 'kept as triangles'), how many components used the layout, the parts
+    rescued (rescued_parts), the parts kept as triangles (kept_parts, kept_triangles: added after the
+    quads), the planes the quads are mirror-symmetric about (symmetry: "", "x", "xz", ...) and the
+    quality figures."""
     extraction = report.get("extraction", {})
     quad = report.get("quad", {})
     failed = report.get("failed_components", [])
+    rescued = {int(r["component"]): r["rescue"] for r in report.get("rescued_components", [])}
     count = report.get("quantization", {}).get("count", {})
     return dict(quads_expected=int(report.get("quantization", {}).get("quads_expected", -1)),
                 count_note=str(count.get("note", "")),
                 components=int(report.get("input", {}).get("components", 0)),
-                quad_paths=[str(c.get("path", "")) if c else "kept as triangles"
-                            for c in extraction.get("components", [])],
+                quad_paths=[str(c.get("path", "")) if c else
+                            f"rescued: {rescued[i]}" if i in rescued else "kept as triangles"
+                            for i, c in enumerate(extraction.get("components", []))],
+                rescued_parts=len(rescued),
                 kept_parts=len(failed), kept_triangles=sum(int(f["triangles"]) for f in failed),
                 layout_components=int(extraction.get("layout_components", 0)),
                 symmetry=str(report.get("symmetry", {}).get("axes", "")),
@@ -445,6 +450,9 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         warn = bool(obj["qgp"]["count_note"])
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
             message += f"; {obj['qgp']['count_note']}"
+        rescued = report.get("rescued_components", [])
+        if rescued:  # parts whose layout gave no quads, quadded finer or by splitting their triangles
+            message += f"; rescued: {_failed_parts(rescued)}"
         failed = report.get("failed_components", [])
         if failed:  # the parts kept as triangles are selected, so Edit Mode shows them
             blender_mesh.select_faces(obj.data, list(range(len(quads), len(quads) + len(kept))))

@@ -318,6 +318,17 @@ void print_remesh_summary(const qgp::Json& report) {
               << "0-based face order of the output); the surface folds within them\n";
 }
 
+// Names the components whose layout gave no quads and how they were quadded (stderr).
+void print_rescued_components(const qgp::Json& report) {
+  for (const auto& s : report.value("rescued_components", qgp::Json::array()))
+    std::cerr << "qgp: warning: component " << s["component"] << " (" << s["triangles"] << " triangles) quadded "
+              << (s["rescue"] == "split triangles"
+                      ? std::string("by splitting its triangles")
+                      : "at " + s["edge_length_factor"].dump() + " of the quad edge length")
+              << " into " << s["quads"] << " quads, as its layout gave none: " << s["stage"].get<std::string>() << ": "
+              << s["message"].get<std::string>() << "\n";
+}
+
 // Names the components kept as triangles (stderr); true if there are any.
 bool print_failed_components(const qgp::Json& report) {
   const qgp::Json failed = report.value("failed_components", qgp::Json::array());
@@ -372,6 +383,7 @@ int run(const CommandLine& cl) {
       written = false;
     }
     print_remesh_summary(report);
+    print_rescued_components(report);
   }
   written = write_optional_outputs(cl, session.get(), false) && written;
   written = write_report(cl.report, report) && written;

@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "addon")
 import torture_set  # noqa: E402
 from core import binding  # noqa: E402
 
-STATUS = {"quads": "ok", "partial": "partial"}
+STATUS = {"quads": "ok", "rescued": "ok", "partial": "partial"}
 ERROR_CODE = {"refused": (binding.ERR_INVALID_MESH, binding.ERR_UNREADABLE_FILE), "failed": (binding.ERR_STAGE_FAILED,)}
 check = torture_set.Checks()
 
@@ -52,6 +52,7 @@ def run_case(case, folder):
     check(all(case.message in f["message"] for f in failed), f"{where}: {failed} do not say '{case.message}'")
     missing = torture_set.repairs_missing(case, report)
     check(not missing, f"{where}: repairs {missing} missing")
+    check(not torture_set.rescue_problems(case, report), f"{where}: {torture_set.rescue_problems(case, report)}")
     problems = torture_set.validate_output(vertices, faces, report)
     check(not problems, f"{where}: {problems}")
     print(f"{case.name} | {report['status']} | {sum(len(f) == 4 for f in faces)} quads | "

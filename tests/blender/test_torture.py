@@ -5,9 +5,9 @@ documented, as it does for the CLI and the C API.
 Per case the file is read by the add-on's own reader into a new object (files it cannot read are
 refused there, with the documented message), then Quad Remesh runs on it at TARGET_QUADS: "quads"
 finishes with a valid quad object (torture_set.validate_output, against the native report of the
-add-on's session) and no warning beyond flipped quads; "partial" finishes with the kept triangles
-and a warning naming them; "refused" and "failed" end in an error with the message and change
-nothing. The source object's mesh data is never changed."""
+add-on's session) and no warning beyond flipped quads (and, "rescued", the parts rescued, with
+why); "partial" finishes with the kept triangles and a warning naming them; "refused" and "failed"
+end in an error with the message and change nothing. The source object's mesh data is never changed."""
 import contextlib
 import io
 import os
@@ -67,6 +67,8 @@ def check_output(case, addon, source, result, lines, quad):
         expected = (["face against"] if flipped else []) + ([note] if note else [])
         assert all(any(e in w for e in expected) for w in lines), (lines, expected)
         assert all(any(e in w for w in lines) for e in expected), (lines, expected)
+        assert case.outcome != "rescued" or any("rescued: part" in w and case.message in w for w in lines), lines
+    assert not torture_set.rescue_problems(case, report), torture_set.rescue_problems(case, report)
     assert not torture_set.repairs_missing(case, report), torture_set.repairs_missing(case, report)
     return sum(len(f) == 4 for f in faces)
 

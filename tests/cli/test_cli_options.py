@@ -8,8 +8,8 @@ edge-manifold, the input's Euler characteristic, as many faces as the report say
 --layout-out polylines (one per T-edge),
 features from --sharp-angle and --features (counted here independently from the input's dihedral
 angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, and the
-welding of a triangle soup (--no-weld), and a many-part mesh some of whose parts cannot be quadded
-(exit 5, kept as triangles).
+welding of a triangle soup (--no-weld), a many-part mesh some of whose parts' layouts give no quads
+(rescued, exit 0) and a non-orientable part (exit 5, kept as triangles).
 """
 import argparse
 import json
@@ -325,34 +325,32 @@ def test_weld(qgp, meshes, tmp):
     check(proc.returncode == 0 and inp["components"] == len(faces), "--no-weld keeps the soup's triangles apart")
 
 
-def test_partial(qgp, meshes, tmp):
-    """Parts that cannot be quadded are kept as their triangles; every other part is written (exit 5)."""
+def test_rescued_parts(qgp, meshes, tmp):
+    """Parts whose layout gives no quads are rescued (quadded finer, or their triangles split), named on
+    stderr with why; every part is quads (exit 0)."""
     out, report = os.path.join(tmp, "featuretype.obj"), os.path.join(tmp, "featuretype.json")
     proc = run(qgp, "remesh", os.path.join(meshes, "featuretype.ply"), "--no-weld", "-o", out, "--faces", 2000,
                "--report", report)
     r = json.load(open(report))
-    failed = r.get("failed_components", [])
-    check(proc.returncode == 5 and r["status"] == "partial" and failed and r["error"] is None,
-          f"featuretype unwelded ({r['input']['components']} parts): exit 5, status partial "
-          f"({len(failed)} part(s) failed)")
-    check(all(f"component {f['component']} ({f['triangles']} triangles) kept as triangles: {f['stage']}: "
-              f"{f['message']}" in proc.stderr for f in failed) and "complete except" in proc.stderr,
-          "stderr names every part kept as triangles, with its stage and reason")
+    rescued = r.get("rescued_components", [])
+    check(proc.returncode == 0 and r["status"] == "ok" and rescued and "failed_components" not in r,
+          f"featuretype unwelded ({r['input']['components']} parts): exit 0, status ok "
+          f"({len(rescued)} part(s) rescued)")
+    check(all(f"component {p['component']} ({p['triangles']} triangles) quadded " in proc.stderr
+              and f"into {p['quads']} quads, as its layout gave none: {p['stage']}: {p['message']}" in proc.stderr
+              for p in rescued), "stderr names every rescued part, with its stage and reason")
+    check("rescued" in r["quantization"]["count"]["note"], "the count note names the rescue")
     vertices, faces, _ = read_obj(out)
     objects = [line.split()[1] for line in open(out) if line.startswith("o ")]
-    quads = [f for f in faces if len(f) == 4]
-    triangles = [f for f in faces if len(f) == 3]
-    check(len(quads) == r["quad"]["faces"] and len(quads) + len(triangles) == len(faces),
-          f"-o: the report's {len(quads)} quads, then only triangles")
-    check(len(triangles) == sum(f["triangles"] for f in failed)
-          and [f"component_{f['component']}_triangles" for f in failed] == objects[-len(failed):],
-          "-o: each failed part as its own object of its triangles, after the quads")
-    check(len(objects) == r["input"]["components"], "-o: every other part is an object of quads")
+    check(all(len(f) == 4 for f in faces) and len(faces) == r["quad"]["faces"], "-o: only the report's quads")
+    check(len(objects) == r["input"]["components"], "-o: every part is an object of quads")
     check(all(0 <= i < len(vertices) for f in faces for i in f), "-o: indices in range")
-    check(all(len(fs) <= 2 for fs in edge_faces(quads).values()) and r["quad"]["non_manifold_edges"] == 0
+    check(all(len(fs) <= 2 for fs in edge_faces(faces).values()) and r["quad"]["non_manifold_edges"] == 0
           and r["quad"]["inconsistent_edges"] == 0, "-o: the quads are edge-manifold and consistently oriented")
-    check(all(r["extraction"]["components"][f["component"]] is None for f in failed),
-          "report: a failed part has no extraction entry (null)")
+    check(r["quad"]["euler_characteristic"] == sum(r["input"]["euler_characteristic"]),
+          "-o: the Euler characteristic of every part")
+    check(all(r["extraction"]["components"][p["component"]] is None for p in rescued),
+          "report: a rescued part has no extraction entry (null)")
 
 
 def test_non_orientable_part(qgp, meshes, tmp):
@@ -387,7 +385,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
                      test_quad_count, test_symmetry, test_sizing,
-                     test_features, test_drop_bad_components, test_weld, test_partial, test_non_orientable_part):
+                     test_features, test_drop_bad_components, test_weld, test_rescued_parts, test_non_orientable_part):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)

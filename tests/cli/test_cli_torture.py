@@ -52,7 +52,8 @@ def run_case(qgp, case, folder):
     missing = torture_set.repairs_missing(case, report)
     check(not missing, f"{where}: repairs {missing} missing from {report.get('input', {}).get('repairs')}")
     quads = None
-    if case.outcome in ("quads", "partial"):
+    check(not torture_set.rescue_problems(case, report), f"{where}: {torture_set.rescue_problems(case, report)}")
+    if case.outcome in ("quads", "rescued", "partial"):
         check(os.path.exists(out), f"{where}: no OBJ")
         if os.path.exists(out):
             vertices, faces = read_obj(out)

@@ -131,6 +131,8 @@ QGP_API int qgp_result_quad_fetch(qgp_session* session, double* vertices, int32_
 
 /* The components of a many-part mesh that the last remesh job could not quad (the report's
  * "status" is "partial" and "failed_components" says why), kept as their repaired triangles, and
+ * (a remesh with the greedy quantizer rescues every part whose layout gives no quads: quadded at a
+ * finer density or by splitting its triangles, among the quads; the report's "rescued_components")
  * non-orientable parts, kept as their input triangles in their input orientation (numbered after
  * the components of qgp_intake_counts):
  * counts (0 and 0 when every component was quadded), then vertices (nv x 3), triangles (nt x 3),

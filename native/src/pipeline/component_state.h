@@ -72,6 +72,7 @@ struct CellMapFallback {
 enum class QuadSource {
   IntegerGridMap,  // extracted from the integer-grid map (QEx)
   TMeshLayout,     // each quantized T-mesh cell as its w x h grid (quad_extraction/layout_quads)
+  SplitTriangles,  // the part's triangles (decimated to the budget) split into 3 quads each
 };
 const char* quad_source_name(QuadSource source);
 
@@ -136,6 +137,14 @@ struct ComponentState {
   StageResult<QuadChoice, uint64_t> quads;          // igm
   // Set when a stage failed on this component in the last run; later stages skip it.
   std::optional<PartFailure> failure;
+  // A failed component of a remesh job (failure says why) rescued by policy.h's failed-part ladder:
+  // quadded at this fraction of the quad edge length asked (quads holds them), or else by splitting
+  // its triangles.
+  double finer_edge_factor = 1;
+  std::optional<QuadChoice> split_quads;
+  // Whether the component has quads in the last run: its own, or those of a rescue.
+  bool quadded() const { return !failure || finer_edge_factor < 1 || split_quads.has_value(); }
+  const QuadChoice& quad_choice() const { return split_quads ? *split_quads : *quads; }
 
   // Model units per uv unit of the seamless map.
   double seamless_edge_length() const { return seamless.key().edge_length; }

@@ -9,7 +9,9 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "igm/untangle_map.h"
+#include "intake/working_mesh.h"
 #include "metrics/quad_metrics.h"
+#include "quad_extraction/split_triangles.h"
 #include "quad_extraction/surface_projection.h"
 
 namespace qgp {
@@ -91,8 +93,9 @@ std::string quad_mesh_defects(const QuadTopology& t, int euler) {
 }
 
 // Unfolds flipped quads on the working mesh, then, projected back, on the input surface.
-UntangleStats untangle_on_surface(const ComponentState& state, QuadMesh& quads, Progress& progress) {
-  UntangleStats stats = untangle_flipped_quads(quads, state.mesh, state.field->feature_edge, progress);
+UntangleStats untangle_on_surface(const ComponentState& state, const std::vector<char>& feature_edges, QuadMesh& quads,
+                                  Progress& progress) {
+  UntangleStats stats = untangle_flipped_quads(quads, state.mesh, feature_edges, progress);
   if (state.full_mesh) {
     project_to_surface(quads, *state.full_mesh, progress);
     const UntangleStats projected = untangle_flipped_quads(quads, *state.full_mesh, state.full_feature_edges, progress);
@@ -119,7 +122,7 @@ std::optional<QuadChoice> quads_of_the_map(const ComponentState& state, Progress
     *why_not = quad_mesh_defects(quad_topology(choice.extraction.quads), state.euler_characteristic);
     if (!why_not->empty()) return std::nullopt;
     choice.source = QuadSource::IntegerGridMap;
-    choice.untangle = untangle_on_surface(state, choice.extraction.quads, progress);
+    choice.untangle = untangle_on_surface(state, state.field->feature_edge, choice.extraction.quads, progress);
     return choice;
   } catch (const Error& e) {
     if (e.code() != ErrorCode::StageFailed) throw;
@@ -145,7 +148,7 @@ std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progr
   choice.extraction.stats.seconds = layout.stats.seconds;
   for (char s : choice.extraction.quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
   choice.layout = layout.stats;
-  choice.untangle = untangle_on_surface(state, choice.extraction.quads, progress);
+  choice.untangle = untangle_on_surface(state, state.field->feature_edge, choice.extraction.quads, progress);
   return choice;
 }
 
@@ -361,6 +364,40 @@ QuadChoice choose_quads(const ComponentState& state, Progress& progress) {
     return std::move(*layout);
   }
   return std::move(*chosen);
+}
+
+namespace {
+
+// The component's working triangles, decimated to `max_faces` when it has more than twice as many,
+// split into quads on the component's surface.
+QuadChoice split_triangles_on_surface(const ComponentState& state, int max_faces, Progress& progress) {
+  const WorkingMesh coarse = make_working_mesh(state.mesh, state.feature_edges, max_faces, progress);
+  QuadChoice choice;
+  choice.source = QuadSource::SplitTriangles;
+  QuadMesh& quads = choice.extraction.quads;
+  quads = split_triangles_into_quads(coarse.mesh);
+  if (coarse.decimated) project_to_surface(quads, state.mesh, progress);
+  choice.untangle = untangle_on_surface(state, state.feature_edges, quads, progress);
+  choice.extraction.stats.expected_quads = quads.num_quads();
+  for (char s : quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
+  return choice;
+}
+
+}  // namespace
+
+bool finer_density_may_help(const std::string& failed_stage) {
+  return failed_stage == "quantization" || failed_stage == "igm" || failed_stage == "quad_extraction";
+}
+
+QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress) {
+  const int max_faces = static_cast<int>(std::min(std::max(std::ceil(target_quads / 3), 1.0), 1e9));
+  QuadChoice choice = split_triangles_on_surface(state, max_faces, progress);
+  if (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces())
+    choice = split_triangles_on_surface(state, state.mesh.num_faces(), progress);
+  const std::string defects = quad_mesh_defects(quad_topology(choice.extraction.quads), state.euler_characteristic);
+  if (!defects.empty())
+    throw Error(ErrorCode::StageFailed, "the triangles split into quads do not form a valid mesh (" + defects + ")");
+  return choice;
 }
 
 }  // namespace qgp

@@ -14,6 +14,12 @@
 //   quads          choose_quads             the map's quads when the map is regular and they form a
 //                                           valid mesh; else (or when fewer stay flipped) the
 //                                           T-mesh layout's quads; else a refusal naming why
+//   failed part    quads_of_split_triangles a remesh part a stage failed on (StageFailed): its triangles,
+//                                           decimated to its quad budget, split into 3 quads each
+//                                           (the decimated ones when no quad is flipped)...
+//                  kFinerEdgeFactors        ...unless its quantized layout gave no valid quads (a hole
+//                                           or handle narrower than a quad) and the part alone at 1/2,
+//                                           else 1/4 of the quad edge length gives no more quads
 #pragma once
 #include "core/progress.h"
 #include "pipeline/component_state.h"
@@ -97,5 +103,18 @@ const CellMap* cell_map_in_use(const ComponentState& state);
 // some stay flipped after the untangle, those of the quantized T-mesh layout (kept if valid and
 // fewer stay flipped). Throws Error(StageFailed) naming why when neither is valid.
 QuadChoice choose_quads(const ComponentState& state, Progress& progress);
+
+// A remesh part whose quads failed at one of these stages (its T-mesh exists, the quantization
+// collapsed it) is run again alone at these fractions of the quad edge length, in order.
+constexpr double kFinerEdgeFactors[] = {0.5, 0.25};
+bool finer_density_may_help(const std::string& failed_stage);
+
+// The smallest valid quad mesh of the component's topology, for a part of a remesh job whose
+// layout gave no quads (a hole or handle narrower than a quad, a stage that failed): its triangles,
+// decimated toward target_quads / 3 (topology and feature curves kept), each split into 3 quads
+// (quad_extraction/split_triangles.h) and projected onto the input surface. When the decimated
+// split leaves quads flipped, the undecimated triangles are split instead. Throws
+// Error(StageFailed) if the quads still do not form a valid mesh.
+QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress);
 
 }  // namespace qgp

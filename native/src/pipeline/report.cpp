@@ -33,7 +33,12 @@ void to_json(Json& j, const CellMapFallback& fallback) {
 }
 
 const char* quad_source_name(QuadSource source) {
-  return source == QuadSource::IntegerGridMap ? "integer-grid map" : "T-mesh layout";
+  switch (source) {
+    case QuadSource::IntegerGridMap: return "integer-grid map";
+    case QuadSource::TMeshLayout: return "T-mesh layout";
+    case QuadSource::SplitTriangles: return "split triangles";
+  }
+  return "";
 }
 
 void to_json(Json& j, const QuadChoice& choice) {

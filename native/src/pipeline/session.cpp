@@ -274,14 +274,16 @@ void Session::add_preparation_repairs() {
                                            " feature edge(s) are not edges of the repaired mesh and were ignored");
 }
 
-// A stage failure of one component of a many-part mesh: the component is kept as its triangles and
-// the others go on. A cancel, a bad option, or a failure of the only component ends the job.
-bool part_failure_is_kept(const Error& e, size_t num_components) {
-  return num_components > 1 && e.code() != ErrorCode::Cancelled && e.code() != ErrorCode::InvalidArgument;
+// A stage failure of one component: the others go on, and the component is rescued (`rescues` a
+// StageFailed: rescue_failed_components) or kept as its triangles. A cancel, a bad option, or a
+// failure of the only component that is not rescued ends the job.
+bool part_failure_is_kept(const Error& e, size_t num_components, bool rescues) {
+  if (e.code() == ErrorCode::Cancelled || e.code() == ErrorCode::InvalidArgument) return false;
+  return num_components > 1 || (rescues && e.code() == ErrorCode::StageFailed);
 }
 
 template <class Body>
-void Session::for_each_component(const char* stage, Progress& progress, Body body) {
+void Session::for_each_component(Job job, const char* stage, Progress& progress, Body body) {
   Timer timer;
   progress.begin_stage(stage);
   double faces = 0, done = 0;
@@ -294,7 +296,7 @@ void Session::for_each_component(const char* stage, Progress& progress, Body bod
     try {
       body(state);
     } catch (const Error& e) {
-      if (!part_failure_is_kept(e, components_.size())) {
+      if (!part_failure_is_kept(e, components_.size(), rescues_failed_components(job))) {
         if (components_.size() <= 1 || e.code() == ErrorCode::Cancelled) throw;
         throw Error(e.code(), "component " + std::to_string(c) + ": " + e.what());
       }
@@ -302,55 +304,144 @@ void Session::for_each_component(const char* stage, Progress& progress, Body bod
     }
   }
   report_["timings_s"][stage] = timer.seconds();
+  if (!rescues_failed_components(job)) throw_if_every_component_failed();
+}
+
+namespace {
+// Errors a rescue rung may end with (the next rung is tried): not a cancel or a bad option.
+void rethrow_unless_rung_failed(const Error& e) {
+  if (e.code() == ErrorCode::Cancelled || e.code() == ErrorCode::InvalidArgument) throw e;
+}
+}  // namespace
+
+bool Session::rescues_failed_components(Job job) const {
+  return job == Job::Remesh && options_.quantizer == Quantizer::Greedy;
+}
+
+bool Session::quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
+                                    Progress& progress) {
+  for (const double factor : kFinerEdgeFactors) {
+    const double edge_length = target_edge_length() * factor;
+    try {
+      update_seamless_map(state, edge_length, component_face_sizes(state), progress);
+      update_tmesh(state, progress);
+      update_quantization(state, edge_length, target_quads / (factor * factor), options_.quantizer, progress);
+      update_integer_grid_map(state, job, progress);
+      update_quads(state, progress);
+      if (state.quads->extraction.quads.num_quads() > max_quads) return false;  // finer ones have more
+      state.finer_edge_factor = factor;
+      return true;
+    } catch (const Error& e) {
+      rethrow_unless_rung_failed(e);
+    }
+  }
+  return false;
+}
+
+void Session::rescue_failed_components(Job job, Progress& progress) {
+  Timer timer;
+  progress.begin_stage("rescue");
+  const std::vector<double> targets = component_quad_targets();
+  const double edge_length = target_edge_length();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (!state.failure || state.failure->code != ErrorCode::StageFailed) continue;  // e.g. a degenerate part
+    const int component = static_cast<int>(c);
+    const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
+    try {
+      state.split_quads = quads_of_split_triangles(state, target, progress);
+    } catch (const Error& e) {
+      rethrow_unless_rung_failed(e);
+      state.failure->message += "; " + std::string(e.what());
+    }
+    const int64_t most =
+        state.split_quads ? state.split_quads->extraction.quads.num_quads() : std::numeric_limits<int64_t>::max();
+    if (finer_density_may_help(state.failure->stage) && quad_at_finer_density(state, target, most, job, progress))
+      state.split_quads.reset();
+  }
+  report_["timings_s"]["rescue"] = timer.seconds();
   throw_if_every_component_failed();
 }
 
 void Session::throw_if_every_component_failed() const {
+  if (components_.empty()) throw Error(ErrorCode::InvalidMesh, "no part of the mesh is left to remesh");
   for (const ComponentState& state : components_)
-    if (!state.failure) return;
+    if (state.quadded()) return;
   const PartFailure& first = *components_.front().failure;
   throw Error(first.code, "component 0: " + first.message + " (and every other component failed as well)");
 }
 
 void Session::run_remesh_stages(Job job, Progress& progress) {
   prepare_components(job, progress);
-  for (ComponentState& state : components_) state.failure.reset();
+  for (ComponentState& state : components_) {
+    state.failure.reset();
+    state.split_quads.reset();
+    state.finer_edge_factor = 1;
+  }
   report_["working_mesh"] = working_mesh_report(components_);
   add_preparation_repairs();
   const double edge_length = target_edge_length();
-  for_each_component("cross_field", progress, [&](ComponentState& s) { update_cross_field(s, progress); });
-  for_each_component("cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
+  for_each_component(job, "cross_field", progress, [&](ComponentState& s) { update_cross_field(s, progress); });
+  for_each_component(job, "cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
   report_["field"] = field_report(components_);
-  for_each_component("seamless_map", progress, [&](ComponentState& s) {
+  for_each_component(job, "seamless_map", progress, [&](ComponentState& s) {
     update_seamless_map(s, edge_length, component_face_sizes(s), progress);
   });
   report_["seamless"] = seamless_report(components_, edge_length);
-  for_each_component("tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
+  for_each_component(job, "tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
   report_["tmesh"] = tmesh_report(components_);
   const std::vector<double> quad_targets = component_quad_targets();
-  for_each_component("quantization", progress, [&](ComponentState& s) {
+  for_each_component(job, "quantization", progress, [&](ComponentState& s) {
     update_quantization(s, edge_length, quad_targets[&s - components_.data()], options_.quantizer, progress);
   });
   report_["quantization"] = quantization_report(components_, options_.quantizer, options_.symmetry.copies());
-  for_each_component("igm", progress, [&](ComponentState& s) {
+  for_each_component(job, "igm", progress, [&](ComponentState& s) {
     update_integer_grid_map(s, job, progress);
     if (options_.fallback_uv_map) update_cell_map(s, progress);
   });
   report_["igm"] = igm_report(components_);
   if (job == Job::Remesh) {
-    for_each_component("quad_extraction", progress, [&](ComponentState& s) { update_quads(s, progress); });
+    for_each_component(job, "quad_extraction", progress, [&](ComponentState& s) { update_quads(s, progress); });
     report_["extraction"] = extraction_report(components_, report_["igm"]);
+    if (rescues_failed_components(job)) rescue_failed_components(job, progress);
   }
   if (!half_) collect_grid_uvs();  // the map of the input's own triangles (a half has other triangles)
   if (job == Job::Remesh) collect_quads(progress);
   report_failed_components();
 }
 
+void Session::note_rescued_components(Json rescued) {
+  int64_t quads = 0;
+  for (const Json& s : rescued) quads += s["quads"].get<int64_t>();
+  Json& count = report_["quantization"]["count"];
+  std::string made;
+  if (count.contains("target"))
+    made = std::to_string(std::lround(count["target"].get<double>())) + " quads asked, " +
+           std::to_string(report_["quad"].value("faces", 0)) + " made: ";
+  count["note"] = made + std::to_string(rescued.size()) + " part(s) whose layout gave no valid quads rescued with " +
+                  std::to_string(quads) +
+                  " quads, at a finer density or by splitting their triangles (report: "
+                  "rescued_components)";
+  report_["rescued_components"] = std::move(rescued);
+}
+
 void Session::report_failed_components() {
-  Json failed = Json::array();
+  Json failed = Json::array(), rescued = Json::array();
   for (size_t c = 0; c < components_.size(); ++c) {
     const std::optional<PartFailure>& failure = components_[c].failure;
     if (!failure) continue;
+    if (components_[c].quadded()) {
+      const ComponentState& state = components_[c];
+      rescued.push_back({{"component", c},
+                         {"triangles", intake_->components[c].faces.size()},
+                         {"quads", state.quad_choice().extraction.quads.num_quads()},
+                         {"rescue", state.split_quads ? "split triangles" : "finer density"},
+                         {"edge_length_factor", state.finer_edge_factor},
+                         {"stage", failure->stage},
+                         {"code", error_code_name(failure->code)},
+                         {"message", failure->message}});
+      continue;
+    }
     failed.push_back({{"component", c},
                       {"triangles", intake_->components[c].faces.size()},
                       {"stage", failure->stage},
@@ -364,6 +455,7 @@ void Session::report_failed_components() {
                       {"stage", "intake"},
                       {"code", error_code_name(ErrorCode::InvalidMesh)},
                       {"message", "non-orientable (a surface without two sides has no quad mesh)"}});
+  if (!rescued.empty()) note_rescued_components(std::move(rescued));
   if (failed.empty()) return;
   report_["status"] = "partial";
   report_["failed_components"] = std::move(failed);
@@ -474,9 +566,9 @@ void Session::collect_quads(Progress& progress) {
   std::vector<int> quadded, failed;
   for (size_t c = 0; c < components_.size(); ++c) {
     const ComponentState& state = components_[c];
-    (state.failure ? failed : quadded).push_back(static_cast<int>(c));
-    if (state.failure) continue;
-    const QuadMesh& part = state.quads->extraction.quads;
+    (state.quadded() ? quadded : failed).push_back(static_cast<int>(c));
+    if (!state.quadded()) continue;
+    const QuadMesh& part = state.quad_choice().extraction.quads;
     append_quad_mesh(*quads_, part, static_cast<int>(c));
     if (half_) continue;  // mirror_results finds every quad's face on the whole input
     for (const int f : intake_faces_under_quad_centres(part, state))

@@ -88,8 +88,19 @@ class Session {
   void add_preparation_repairs();
   // Runs body(state) for every component inside progress stage `stage`, each with its share of
   // the progress (by face count); records timings_s[stage]; a failure names the component.
+  // A failure of the only component is kept too when the job rescues it.
   template <class Body>
-  void for_each_component(const char* stage, Progress& progress, Body body);
+  void for_each_component(Job job, const char* stage, Progress& progress, Body body);
+  // Remesh jobs with the greedy quantizer rescue failed components (the round baseline's failures
+  // are counted, not rescued).
+  bool rescues_failed_components(Job job) const;
+  // Every component a remesh stage failed on is rescued by policy.h's failed-part ladder: quadded
+  // at a finer density, or by splitting its triangles; throws when no component has quads.
+  void rescue_failed_components(Job job, Progress& progress);
+  // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them;
+  // false if none gives such quads.
+  bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
+                             Progress& progress);
   void collect_grid_uvs();
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
@@ -100,6 +111,8 @@ class Session {
   // The quad figures (report "quad") of quads_, the quads of components `quadded`.
   Json measure_quads(const std::vector<int>& quadded, bool all_quadded, Progress& progress) const;
   void report_failed_components();
+  // Report rescued_components, named in the quad count's note.
+  void note_rescued_components(Json rescued);
   void throw_if_every_component_failed() const;
   void report_error(const std::string& code, const std::string& message);
 
