@@ -24,7 +24,7 @@ clang-format-14 --dry-run --Werror $(git ls-files 'native/*.cpp' 'native/*.h' 't
 echo "code checks: function length, clang-format (.clang-format), flake8 (.flake8) clean"
 
 # The long sweeps over the real meshes (ctest names); they get a longer per-test timeout.
-SWEEPS='^(SessionMeshes|SymmetryMeshes|SizingSession|SizingMeshes|LayoutQuadsMeshes|LayoutMeshes|SeamlessMapMeshes|IgmMeshes|CellMapMeshes|CApiMeshes)\.|Benchmark|^cli_uv_out$|^blender_'
+SWEEPS='^(SessionMeshes|RescueMeshes|SplitTrianglesMeshes|SymmetryMeshes|SizingSession|SizingMeshes|LayoutQuadsMeshes|LayoutMeshes|SeamlessMapMeshes|IgmMeshes|CellMapMeshes|CApiMeshes)\.|Benchmark|^cli_uv_out$|^blender_'
 SWEEP_TIMEOUT=2400  # seconds per test
 # The instrumented builds (sanitizers, fuzzing) at -O1 -g1 (line tables for the reports' stack
 # traces): they compile in about half the time of -O2 -g (an instrumented test file: 47 s against
