@@ -325,8 +325,8 @@ void print_rescued_components(const qgp::Json& report) {
               << (s["rescue"] == "split triangles"
                       ? std::string("by splitting its triangles")
                       : "at " + s["edge_length_factor"].dump() + " of the quad edge length")
-              << " into " << s["quads"] << " quads, as its layout gave none: " << s["stage"].get<std::string>() << ": "
-              << s["message"].get<std::string>() << "\n";
+              << " into " << s["quads"] << " quads, as its layout gave none valid: " << s["stage"].get<std::string>()
+              << ": " << s["message"].get<std::string>() << "\n";
 }
 
 // Names the components kept as triangles (stderr); true if there are any.

@@ -129,7 +129,8 @@ void expect_every_part_quadded(const std::string& name, const Session& session) 
 }
 
 // Truck at 500 quads: five parts have holes narrower than a quad (their layouts collapse them).
-// Each is rescued, at a finer density when that gives no more quads than splitting its triangles.
+// Each is rescued, at a finer density when that gives no more quads than splitting its triangles;
+// small parts whose quads stay flipped take their split triangles, which have none.
 TEST(RescueMeshes, TruckAtACoarseDensity) {
   Session session(read_mesh_file(test::mesh_path("truck.obj")));
   const Json report = remesh(session, 500);
@@ -137,10 +138,18 @@ TEST(RescueMeshes, TruckAtACoarseDensity) {
   const Json& rescued = report["rescued_components"];
   ASSERT_GE(rescued.size(), 1u);
   std::set<std::string> kinds;
+  int flip_rescues = 0;
   for (const Json& r : rescued) {
     const ComponentState& state = session.components()[r["component"].get<int>()];
     EXPECT_EQ(r["quads"].get<int>(), state.quad_choice().extraction.quads.num_quads());
-    EXPECT_NE(r["message"].get<std::string>().find("narrower than one quad"), std::string::npos) << r["message"];
+    const std::string why = r["message"];
+    const bool flipped = why.find("stay flipped") != std::string::npos;
+    EXPECT_TRUE(flipped || why.find("narrower than one quad") != std::string::npos) << why;
+    if (flipped) {
+      EXPECT_EQ(r["rescue"], "split triangles");
+      EXPECT_EQ(state.quad_choice().untangle.flipped_after, 0);
+      ++flip_rescues;
+    }
     kinds.insert(r["rescue"].get<std::string>());
     if (r["rescue"] == "finer density") {
       EXPECT_TRUE(r["edge_length_factor"] == 0.5 || r["edge_length_factor"] == 0.25) << r;
@@ -150,6 +159,8 @@ TEST(RescueMeshes, TruckAtACoarseDensity) {
     }
   }
   EXPECT_EQ(kinds.size(), 2u) << "truck at 500 takes both rungs (measured 2026-11-27)";
+  EXPECT_GE(flip_rescues, 1) << "and splits small flipped parts (4 of 5 measured 2026-11-27)";
+  EXPECT_LE(report["quad"]["flipped_quads"].get<int>(), 1);
   EXPECT_NE(report["quantization"]["count"]["note"].get<std::string>().find("rescued"), std::string::npos);
   std::cout << "truck@500: " << rescued.size() << " parts rescued, " << session.quad_result()->num_quads()
             << " quads\n";

@@ -390,10 +390,12 @@ bool finer_density_may_help(const std::string& failed_stage) {
 }
 
 QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress) {
-  const int max_faces = static_cast<int>(std::min(std::max(std::ceil(target_quads / 3), 1.0), 1e9));
-  QuadChoice choice = split_triangles_on_surface(state, max_faces, progress);
-  if (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces())
-    choice = split_triangles_on_surface(state, state.mesh.num_faces(), progress);
+  double max_faces = std::min(std::max(std::ceil(target_quads / 3), 1.0), double(state.mesh.num_faces()));
+  QuadChoice choice = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
+  while (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces()) {
+    max_faces = std::min(kSplitFacesGrowth * max_faces, double(state.mesh.num_faces()));
+    choice = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
+  }
   const std::string defects = quad_mesh_defects(quad_topology(choice.extraction.quads), state.euler_characteristic);
   if (!defects.empty())
     throw Error(ErrorCode::StageFailed, "the triangles split into quads do not form a valid mesh (" + defects + ")");

@@ -16,10 +16,13 @@
 //                                           T-mesh layout's quads; else a refusal naming why
 //   failed part    quads_of_split_triangles a remesh part a stage failed on (StageFailed): its triangles,
 //                                           decimated to its quad budget, split into 3 quads each
-//                                           (the decimated ones when no quad is flipped)...
+//                                           (decimated less, kSplitFacesGrowth times at a time,
+//                                           while quads are flipped)...
 //                  kFinerEdgeFactors        ...unless its quantized layout gave no valid quads (a hole
 //                                           or handle narrower than a quad) and the part alone at 1/2,
 //                                           else 1/4 of the quad edge length gives no more quads
+//   flipped part   kFlipRescueShare         a small part whose quads stay flipped against the
+//                                           surface: its split triangles, when they have none
 #pragma once
 #include "core/progress.h"
 #include "pipeline/component_state.h"
@@ -109,12 +112,19 @@ QuadChoice choose_quads(const ComponentState& state, Progress& progress);
 constexpr double kFinerEdgeFactors[] = {0.5, 0.25};
 bool finer_density_may_help(const std::string& failed_stage);
 
+// A part whose chosen quads stay flipped against the surface (it folds within a quad: thin sheets,
+// small parts) takes its split triangles instead when they have no flipped quad and all such
+// splits' quads, in component order, stay within this share of the quads made: small parts only
+// (a large part keeps its regular quads, its flips reported).
+constexpr double kFlipRescueShare = 0.1;
+
 // The smallest valid quad mesh of the component's topology, for a part of a remesh job whose
 // layout gave no quads (a hole or handle narrower than a quad, a stage that failed): its triangles,
 // decimated toward target_quads / 3 (topology and feature curves kept), each split into 3 quads
-// (quad_extraction/split_triangles.h) and projected onto the input surface. When the decimated
-// split leaves quads flipped, the undecimated triangles are split instead. Throws
-// Error(StageFailed) if the quads still do not form a valid mesh.
+// (quad_extraction/split_triangles.h) and projected onto the input surface. While the split leaves
+// quads flipped, the triangles are decimated to kSplitFacesGrowth times more faces, up to none
+// removed. Throws Error(StageFailed) if the quads do not form a valid mesh.
+constexpr double kSplitFacesGrowth = 4;
 QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress);
 
 }  // namespace qgp

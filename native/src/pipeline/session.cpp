@@ -363,6 +363,34 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
   throw_if_every_component_failed();
 }
 
+void Session::rescue_flipped_components(Progress& progress) {
+  const std::vector<double> targets = component_quad_targets();
+  const double edge_length = target_edge_length();
+  double budget = 0;
+  for (const ComponentState& state : components_)
+    if (state.quadded()) budget += kFlipRescueShare * state.quad_choice().extraction.quads.num_quads();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (state.failure || state.quads->untangle.flipped_after == 0) continue;
+    const int component = static_cast<int>(c);
+    const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
+    std::optional<QuadChoice> split;
+    try {
+      split = quads_of_split_triangles(state, target, progress);
+    } catch (const Error& e) {
+      rethrow_unless_rung_failed(e);
+      continue;
+    }
+    const int quads = split->extraction.quads.num_quads();
+    if (split->untangle.flipped_after > 0 || quads > budget) continue;
+    budget -= quads;
+    state.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                std::to_string(state.quads->untangle.flipped_after) +
+                                    " quad(s) stay flipped against the surface (it folds within them)"};
+    state.split_quads = std::move(split);
+  }
+}
+
 void Session::throw_if_every_component_failed() const {
   if (components_.empty()) throw Error(ErrorCode::InvalidMesh, "no part of the mesh is left to remesh");
   for (const ComponentState& state : components_)
@@ -403,7 +431,10 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   if (job == Job::Remesh) {
     for_each_component(job, "quad_extraction", progress, [&](ComponentState& s) { update_quads(s, progress); });
     report_["extraction"] = extraction_report(components_, report_["igm"]);
-    if (rescues_failed_components(job)) rescue_failed_components(job, progress);
+    if (rescues_failed_components(job)) {
+      rescue_failed_components(job, progress);
+      rescue_flipped_components(progress);
+    }
   }
   if (!half_) collect_grid_uvs();  // the map of the input's own triangles (a half has other triangles)
   if (job == Job::Remesh) collect_quads(progress);
@@ -418,10 +449,10 @@ void Session::note_rescued_components(Json rescued) {
   if (count.contains("target"))
     made = std::to_string(std::lround(count["target"].get<double>())) + " quads asked, " +
            std::to_string(report_["quad"].value("faces", 0)) + " made: ";
-  count["note"] = made + std::to_string(rescued.size()) + " part(s) whose layout gave no valid quads rescued with " +
+  count["note"] = made + std::to_string(rescued.size()) +
+                  " part(s) rescued (their layouts gave no valid quads, or flipped ones) with " +
                   std::to_string(quads) +
-                  " quads, at a finer density or by splitting their triangles (report: "
-                  "rescued_components)";
+                  " quads, at a finer density or by splitting their triangles (report: rescued_components)";
   report_["rescued_components"] = std::move(rescued);
 }
 

@@ -97,6 +97,9 @@ class Session {
   // Every component a remesh stage failed on is rescued by policy.h's failed-part ladder: quadded
   // at a finer density, or by splitting its triangles; throws when no component has quads.
   void rescue_failed_components(Job job, Progress& progress);
+  // Components whose quads stay flipped get their split triangles instead (policy.h:
+  // kFlipRescueShare).
+  void rescue_flipped_components(Progress& progress);
   // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them;
   // false if none gives such quads.
   bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
