@@ -1,10 +1,12 @@
 // qgp: command-line front end of the native pipeline, for batch use and tests.
 //
-// Exit codes: 0 success, 1 bad command line (or an output that cannot be written), 2 unusable
+// Exit codes: 0 success (parts rescued with more quads are named on stderr, report:
+// rescued_components), 1 bad command line (or an output that cannot be written), 2 unusable
 // input (with a one-line reason on stderr), 3 a pipeline stage failed or was cancelled, 4 internal
 // error (also when the process is ended from inside a library, e.g. MUMPS calling exit, or by a
 // fatal signal: see report_abnormal_ends), 5 complete except named parts: a component of a many-part
-// mesh could not be quadded and is written as its triangles (report: failed_components).
+// mesh (a non-orientable one) could not be quadded and is written as its triangles (report:
+// failed_components).
 #include <signal.h>
 #include <unistd.h>
 
