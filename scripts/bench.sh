@@ -3,23 +3,28 @@
 #   1. Quantized Retopo vs Blender's QuadriFlow in one Blender process (bench/compare_quadriflow.py)
 #   2. scaling of the native pipeline against input size and target density (bench/scaling.py)
 #   3. tables + plots (bench/plots.py) and side-by-side renders (bench/render.py)
-# Output: bench/results/ (compare.csv/.json/.md, scaling.csv/.md) and docs/images/ (plots, renders).
+#   4. every shared mesh through `qgp remesh` at 500 / 2 000 / 8 000 quads, each output checked
+#      (bench/robustness.py; issue 23's sweep)
+# Output: bench/results/ (compare.csv/.json/.md, scaling.csv/.md, robustness.csv/.md) and
+# docs/images/ (plots, renders).
 #
-#   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render]
+#   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render] [--skip-robustness]
 #   MESHES=spot.obj,fandisk.obj TARGETS=2000 ./scripts/bench.sh      # a subset
-#   (also MAX_TRIANGLES, DENSITIES, DENSITY_LEVEL, CASES, QGP_TIMEOUT, SCALING_TIMEOUT, QGP_MESHES)
+#   (also MAX_TRIANGLES, DENSITIES, DENSITY_LEVEL, CASES, QGP_TIMEOUT, SCALING_TIMEOUT, QGP_MESHES,
+#   ROBUSTNESS_MESHES, ROBUSTNESS_TARGETS, ROBUSTNESS_TIMEOUT)
 # Defaults are the full run: every manifold mesh of ../shared/meshes at 2000 and 8000 quads and inputs
 # of about 5 000 to 1 000 000 triangles. --quick: 3 small meshes, 2000 quads, inputs up to ~100k triangles.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-QUICK=0; DO_COMPARE=1; DO_SCALING=1; DO_RENDER=1
+QUICK=0; DO_COMPARE=1; DO_SCALING=1; DO_RENDER=1; DO_ROBUSTNESS=1
 for arg in "$@"; do
   case "$arg" in
     --quick) QUICK=1 ;;
     --skip-compare) DO_COMPARE=0 ;;
     --skip-scaling) DO_SCALING=0 ;;
     --skip-render) DO_RENDER=0 ;;
+    --skip-robustness) DO_ROBUSTNESS=0 ;;
     *) echo "bench: unknown option $arg" >&2; exit 2 ;;
   esac
 done
@@ -31,6 +36,8 @@ if [ "$QUICK" = 1 ]; then
   DENSITIES=${DENSITIES:-1000,2000,4000}
   DENSITY_LEVEL=${DENSITY_LEVEL:-1}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:2000}
+  ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-spot.obj,truck.obj,teapot.obj}
+  ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500}
 else
   MESHES=${MESHES:-}   # empty: all manifold meshes
   TARGETS=${TARGETS:-2000,8000}
@@ -38,6 +45,8 @@ else
   DENSITIES=${DENSITIES:-500,1000,2000,4000,8000,16000,32000}
   DENSITY_LEVEL=${DENSITY_LEVEL:-2}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:8000}
+  ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-}   # empty: every mesh file
+  ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500,2000,8000}
 fi
 MESH_DIR=${QGP_MESHES:-$(cd .. && pwd)/shared/meshes}
 QGP_TIMEOUT=${QGP_TIMEOUT:-900}          # s before a Quantized Retopo run in Blender is cancelled
@@ -83,6 +92,12 @@ if [ "$DO_RENDER" = 1 ]; then
     --results "$RESULTS" --out "$IMAGES" >"$RESULTS/render.log" 2>&1 || { tail -20 "$RESULTS/render.log"; exit 1; }
   grep -E '^render' "$RESULTS/render.log" || true
 fi
+t_render=$(date +%s)
+if [ "$DO_ROBUSTNESS" = 1 ]; then
+  $PYTHON bench/robustness.py --qgp build/bin/qgp --mesh-dir "$MESH_DIR" --meshes "$ROBUSTNESS_MESHES" \
+    --targets "$ROBUSTNESS_TARGETS" --timeout "${ROBUSTNESS_TIMEOUT:-300}" --out "$RESULTS"
+fi
 end=$(date +%s)
-echo "bench: compare $((t_compare - start)) s, scaling $((t_scaling - t_compare)) s, plots+renders $((end - t_scaling)) s"
-echo "bench: tables $RESULTS/compare.md $RESULTS/scaling.md, images $IMAGES/"
+echo "bench: compare $((t_compare - start)) s, scaling $((t_scaling - t_compare)) s, plots+renders" \
+  "$((t_render - t_scaling)) s, robustness $((end - t_render)) s"
+echo "bench: tables $RESULTS/compare.md $RESULTS/scaling.md $RESULTS/robustness.md, images $IMAGES/"
