@@ -20,7 +20,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 MESH_SUFFIXES = (".obj", ".off", ".ply")
-COLUMNS = ["mesh", "target", "exit", "outcome", "seconds", "quads", "kept_triangles", "split_parts", "parts",
+COLUMNS = ["mesh", "target", "exit", "outcome", "seconds", "quads", "kept_triangles", "rescued_parts", "parts",
            "failed_parts", "euler_expected", "euler", "non_manifold_edges", "inconsistent_edges", "flipped_quads",
            "hausdorff", "repairs", "message"]
 
@@ -98,7 +98,7 @@ def run_case(args, mesh, target, work):
     quad = report.get("quad") or {}
     arities = face_arities(out_obj) if os.path.exists(out_obj) else {}
     row.update(quads=arities.get(4, 0), kept_triangles=sum(n for k, n in arities.items() if k != 4),
-               split_parts=len(report.get("split_components", [])),
+               rescued_parts=len(report.get("rescued_components", [])),
                parts=len(report.get("input", {}).get("euler_characteristic", [])),
                failed_parts=len(report.get("failed_components", [])), euler_expected=expected_euler(report),
                euler=quad.get("euler_characteristic", ""), non_manifold_edges=quad.get("non_manifold_edges", ""),
@@ -118,11 +118,11 @@ def write_markdown(rows, path, targets):
              "`bench/robustness.py` (one `qgp remesh` process per run, killed after the timeout). Outcome: "
              "valid = only quads, manifold and oriented, the Euler characteristic of the parts it stands for, "
              "no quad flipped against the input. Hausdorff relative to the bounding-box diagonal.", "",
-             "| mesh | target | outcome | s | quads | kept triangles | split parts | flipped | Hausdorff | repairs |",
+             "| mesh | target | outcome | s | quads | kept triangles | rescued parts | flipped | Hausdorff | repairs |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['mesh']} | {r['target']} | {r['outcome']} | {r['seconds']} | {r['quads']} | "
-                     f"{r['kept_triangles']} | {r['split_parts']} | {r['flipped_quads']} | {r['hausdorff']} | "
+                     f"{r['kept_triangles']} | {r['rescued_parts']} | {r['flipped_quads']} | {r['hausdorff']} | "
                      f"{r['repairs']} |")
     valid = sum(r["outcome"] == "valid" for r in rows)
     lines += ["", f"{valid} of {len(rows)} runs valid with every part quadded (targets {targets})."]
