@@ -389,10 +389,12 @@ bool finer_density_may_help(const std::string& failed_stage) {
   return failed_stage == "quantization" || failed_stage == "igm" || failed_stage == "quad_extraction";
 }
 
-QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress) {
+QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress,
+                                    double max_quads) {
   double max_faces = std::min(std::max(std::ceil(target_quads / 3), 1.0), double(state.mesh.num_faces()));
   QuadChoice choice = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
-  while (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces()) {
+  while (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces() &&
+         3 * kSplitFacesGrowth * max_faces <= max_quads) {
     max_faces = std::min(kSplitFacesGrowth * max_faces, double(state.mesh.num_faces()));
     choice = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
   }

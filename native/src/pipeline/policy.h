@@ -24,6 +24,8 @@
 //   flipped part   kFlipRescueShare         a small part whose quads stay flipped against the
 //                                           surface: its split triangles, when they have none
 #pragma once
+#include <limits>
+
 #include "core/progress.h"
 #include "pipeline/component_state.h"
 #include "pipeline/options.h"
@@ -123,8 +125,10 @@ constexpr double kFlipRescueShare = 0.1;
 // decimated toward target_quads / 3 (topology and feature curves kept), each split into 3 quads
 // (quad_extraction/split_triangles.h) and projected onto the input surface. While the split leaves
 // quads flipped, the triangles are decimated to kSplitFacesGrowth times more faces, up to none
-// removed. Throws Error(StageFailed) if the quads do not form a valid mesh.
+// removed or more than max_quads quads. Throws Error(StageFailed) if the quads do not form a valid
+// mesh.
 constexpr double kSplitFacesGrowth = 4;
-QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress);
+QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress,
+                                    double max_quads = std::numeric_limits<double>::infinity());
 
 }  // namespace qgp

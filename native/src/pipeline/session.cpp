@@ -374,9 +374,10 @@ void Session::rescue_flipped_components(Progress& progress) {
     if (state.failure || state.quads->untangle.flipped_after == 0) continue;
     const int component = static_cast<int>(c);
     const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
+    if (std::min(3.0 * std::ceil(target / 3), 3.0 * state.mesh.num_faces()) > budget) continue;  // too large
     std::optional<QuadChoice> split;
     try {
-      split = quads_of_split_triangles(state, target, progress);
+      split = quads_of_split_triangles(state, target, progress, budget);
     } catch (const Error& e) {
       rethrow_unless_rung_failed(e);
       continue;
