@@ -119,6 +119,9 @@ bool finer_density_may_help(const std::string& failed_stage);
 // splits' quads, in component order, stay within this share of the quads made: small parts only
 // (a large part keeps its regular quads, its flips reported).
 constexpr double kFlipRescueShare = 0.1;
+// ...and only parts of at most this many triangles are tried (each try decimates and untangles the
+// part: on cycloidal's 117 parts, trying every flipped one cost 132 s of a 556 s run).
+constexpr int kFlipRescueMaxTriangles = 1000;
 
 // The smallest valid quad mesh of the component's topology, for a part of a remesh job whose
 // layout gave no quads (a hole or handle narrower than a quad, a stage that failed): its triangles,

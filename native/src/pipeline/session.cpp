@@ -371,7 +371,8 @@ void Session::rescue_flipped_components(Progress& progress) {
     if (state.quadded()) budget += kFlipRescueShare * state.quad_choice().extraction.quads.num_quads();
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
-    if (state.failure || state.quads->untangle.flipped_after == 0) continue;
+    if (state.failure || state.quads->untangle.flipped_after == 0 || state.mesh.num_faces() > kFlipRescueMaxTriangles)
+      continue;
     const int component = static_cast<int>(c);
     const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
     if (std::min(3.0 * std::ceil(target / 3), 3.0 * state.mesh.num_faces()) > budget) continue;  // too large
