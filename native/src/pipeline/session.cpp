@@ -364,6 +364,7 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
 }
 
 void Session::rescue_flipped_components(Progress& progress) {
+  Timer timer;
   const std::vector<double> targets = component_quad_targets();
   const double edge_length = target_edge_length();
   double budget = 0;
@@ -391,6 +392,8 @@ void Session::rescue_flipped_components(Progress& progress) {
                                     " quad(s) stay flipped against the surface (it folds within them)"};
     state.split_quads = std::move(split);
   }
+  Json& rescue_seconds = report_["timings_s"]["rescue"];
+  rescue_seconds = rescue_seconds.get<double>() + timer.seconds();  // after rescue_failed_components'
 }
 
 void Session::throw_if_every_component_failed() const {
