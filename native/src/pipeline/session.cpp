@@ -314,6 +314,14 @@ void rethrow_unless_rung_failed(const Error& e) {
 }
 }  // namespace
 
+std::vector<double> Session::rescue_quad_targets() const {
+  std::vector<double> targets = component_quad_targets();
+  const double edge_length = target_edge_length();
+  for (size_t c = 0; c < targets.size(); ++c)
+    if (targets[c] <= 0) targets[c] = component_area(static_cast<int>(c)) / (edge_length * edge_length);
+  return targets;
+}
+
 bool Session::rescues_failed_components(Job job) const {
   return job == Job::Remesh && options_.quantizer == Quantizer::Greedy;
 }
@@ -341,13 +349,11 @@ bool Session::quad_at_finer_density(ComponentState& state, double target_quads, 
 void Session::rescue_failed_components(Job job, Progress& progress) {
   Timer timer;
   progress.begin_stage("rescue");
-  const std::vector<double> targets = component_quad_targets();
-  const double edge_length = target_edge_length();
+  const std::vector<double> targets = rescue_quad_targets();
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
     if (!state.failure || state.failure->code != ErrorCode::StageFailed) continue;  // e.g. a degenerate part
-    const int component = static_cast<int>(c);
-    const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
+    const double target = targets[c];
     try {
       state.split_quads = quads_of_split_triangles(state, target, progress);
     } catch (const Error& e) {
@@ -365,8 +371,7 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
 
 void Session::rescue_flipped_components(Progress& progress) {
   Timer timer;
-  const std::vector<double> targets = component_quad_targets();
-  const double edge_length = target_edge_length();
+  const std::vector<double> targets = rescue_quad_targets();
   double budget = 0;
   for (const ComponentState& state : components_)
     if (state.quadded()) budget += kFlipRescueShare * state.quad_choice().extraction.quads.num_quads();
@@ -374,8 +379,7 @@ void Session::rescue_flipped_components(Progress& progress) {
     ComponentState& state = components_[c];
     if (state.failure || state.quads->untangle.flipped_after == 0 || state.mesh.num_faces() > kFlipRescueMaxTriangles)
       continue;
-    const int component = static_cast<int>(c);
-    const double target = targets[c] > 0 ? targets[c] : component_area(component) / (edge_length * edge_length);
+    const double target = targets[c];
     if (std::min(3.0 * std::ceil(target / 3), 3.0 * state.mesh.num_faces()) > budget) continue;  // too large
     std::optional<QuadChoice> split;
     try {

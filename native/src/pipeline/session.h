@@ -94,6 +94,9 @@ class Session {
   // Remesh jobs with the greedy quantizer rescue failed components (the round baseline's failures
   // are counted, not rescued).
   bool rescues_failed_components(Job job) const;
+  // Per component the quads its rescue aims at: its share of the count asked, or, when an edge
+  // length was asked, its area over the edge length squared.
+  std::vector<double> rescue_quad_targets() const;
   // Every component a remesh stage failed on is rescued by policy.h's failed-part ladder: quadded
   // at a finer density, or by splitting its triangles; throws when no component has quads.
   void rescue_failed_components(Job job, Progress& progress);
