@@ -487,6 +487,40 @@ TEST(ParametrizationProblem, CancelStopsTheIpoptRepair) {
   EXPECT_LE(updates_after_cancel, 1);
 }
 
+TEST(ParametrizationProblem, CountStagnationEndsARepairThatCannotSucceed) {
+  // Hard constraints pin the three corners of faces to clockwise triangles: no pose unfolds them.
+  // The full budget ends with only those folded (18 rounds here); with count_stagnation_rounds the
+  // repair stops one turn of the strategies after the count last dropped (5 rounds here, folds
+  // around the pinned faces left): the trade a caller with a fallback makes.
+  auto cube = test::make_grid_cube(8);
+  deform(cube.mesh, 1.0, 0.1, 4);
+  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
+  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.5);
+  Progress progress;
+  const ParametrizationSolution free_map = problem.solve({}, progress);
+  ASSERT_EQ(free_map.stats.flipped + free_map.stats.degenerate, 0);
+  const int forced_faces[] = {40, 200, 333};
+  for (int f : forced_faces) {
+    const Vec2 p0(free_map.param.uv(3 * f, 0), free_map.param.uv(3 * f, 1));
+    const Vec2 corner[3] = {p0, p0 + Vec2(0, 0.4), p0 + Vec2(0.4, 0)};  // clockwise
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{3 * f + k, a, 1.0}}, corner[k][a]);
+  }
+  ParametrizationSolveOptions plain;
+  const ParametrizationSolution unbounded = problem.solve(plain, progress);
+  ParametrizationSolveOptions bounded = plain;
+  bounded.count_stagnation_rounds = 4;
+  const ParametrizationSolution stopped = problem.solve(bounded, progress);
+  for (const ParametrizationSolution* s : {&unbounded, &stopped}) {
+    EXPECT_LT(s->stats.constraint_violation, 1e-9);
+    EXPECT_GE(s->stats.flipped, 3);  // the pinned faces stay folded
+  }
+  // At least one turn of the strategies, fewer rounds than the full budget, never a better result.
+  EXPECT_GE(stopped.stats.repair_rounds, bounded.count_stagnation_rounds);
+  EXPECT_LT(stopped.stats.repair_rounds, unbounded.stats.repair_rounds);
+  EXPECT_LE(unbounded.stats.flipped + unbounded.stats.degenerate, stopped.stats.flipped + stopped.stats.degenerate);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Real meshes: components prepared as the Session does (features, split faces, field, cut).
 

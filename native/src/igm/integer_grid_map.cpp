@@ -452,6 +452,7 @@ IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField
   seamless_pose_.uv *= scale_;
   solve_options_.penalty_weight = options.penalty_weight;
   solve_options_.max_repair_rounds = options.max_repair_rounds;
+  solve_options_.count_stagnation_rounds = options.count_stagnation_rounds;
   solve_options_.relinearization_rounds = options.relinearization_rounds;
 }
 

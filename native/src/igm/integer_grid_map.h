@@ -40,6 +40,7 @@ struct IgmOptions {
   double penalty_tolerance = 1e-4;  // stop the penalty phase at ‖Cz − b‖∞ ≤ this (quad units)
   int max_penalty_rounds = 8;       // penalty solves of the re-linearized attempt
   int max_repair_rounds = 24;       // Ipopt repair rounds per solve
+  int count_stagnation_rounds = 0;  // see ParametrizationSolveOptions
   int relinearization_rounds = 1;   // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;           // of the exact result
 };

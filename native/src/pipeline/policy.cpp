@@ -275,6 +275,10 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   Timer timer;
   IgmOptions options;
   options.edge_length = state.seamless_edge_length();
+  if (!escalate) {
+    options.max_repair_rounds = kRepairRoundsWithoutEscalation;
+    options.count_stagnation_rounds = kStagnantRoundsWithoutEscalation;
+  }
   IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
                               state.traced->tmesh, state.quantization->result, options, progress);
   IntegerGridMap map = solver.solve(IgmAttempt::Default, 0, 0.4);

@@ -7,8 +7,9 @@
 //                                           more than asked remain
 //                  quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
 //                                           the quad layout kept at length 1, quantized again
-//   integer-grid   solve_integer_grid_map   default solve; for grid UVs the re-linearized penalty
-//   map                                     phase and the all-faces solve; then the map untangle
+//   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
+//   map                                     stalls); for grid UVs the re-linearized penalty phase
+//                                           and the all-faces solve; then the map untangle
 //   uv map         fallback_cell_map        where the map stays flipped or wound: the §7.1.1 cell
 //                                           map, used when it is flip-free and unwound
 //   quads          choose_quads             the map's quads when the map is regular and they form a
@@ -77,12 +78,21 @@ constexpr double kCountTolerance = 0.025;
 Quantized quantize_to_count(const ComponentState& state, double scale, double target_quads, Progress& progress);
 
 // Quads have a fallback (the T-mesh layout), grid UVs do not: only grid-UV jobs pay for the
-// integer-grid map's escalating attempts.
+// integer-grid map's escalating attempts...
 bool escalates_integer_grid_map(Job job);
+// ...and the full budget of its repair rounds. Without escalation the map's repair stops after
+// kRepairRoundsWithoutEscalation rounds (three turns of the four repair strategies), or after
+// kStagnantRoundsWithoutEscalation rounds (one turn) without fewer bad triangles: in the 27-mesh
+// sweep, maps that became regular took at most 9 Ipopt solves in all, while maps that stayed
+// flipped (their quads then come from the layout) spent up to 24 rounds, most over their whole
+// mesh: minutes on dragon and cycloidal.
+constexpr int kRepairRoundsWithoutEscalation = 12;
+constexpr int kStagnantRoundsWithoutEscalation = 4;
 // True when a stored map serves a job that does (escalate) or does not escalate.
 bool integer_grid_map_serves(const IgmResult& map, bool escalate);
 
-// The component's integer-grid map: the default attempt; when `escalate` and the map has flipped
+// The component's integer-grid map: the default attempt (its repair bounded as above unless
+// `escalate`); when `escalate` and the map has flipped
 // or degenerate triangles or wound one-rings, the re-linearized penalty attempt, then the
 // all-faces attempt, each kept only if it has fewer; finally the map untangle moves vertices where
 // flipped or degenerate triangles remain. stats.path tells the rungs taken.

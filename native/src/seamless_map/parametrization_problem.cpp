@@ -521,6 +521,8 @@ struct RepairTrack {
   Eigen::VectorXd best_z;
   int best_round = -1;
   int rejected = 0;
+  int fewest_bad = std::numeric_limits<int>::max();  // the fewest bad faces of an accepted pose...
+  int fewest_bad_round = -1;                         // ...first reached in this round
 };
 
 // Rotations (relative to the field) of the reference shapes of one region while they spread.
@@ -1021,6 +1023,9 @@ bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track)
   }
   if (current_.bad() == 0) return false;
   if (round - track.best_round >= options_.stagnation_rounds) return false;  // no new best for a while
+  if (current_.bad() < track.fewest_bad) track.fewest_bad = current_.bad(), track.fewest_bad_round = round;
+  if (options_.count_stagnation_rounds > 0 && round - track.fewest_bad_round >= options_.count_stagnation_rounds)
+    return false;  // no fewer bad faces for a while
   widen_rings();
   return true;
 }

@@ -62,6 +62,9 @@ struct ParametrizationSolveOptions {
   int max_ring_size = 32;                      // a face's rings double while it stays bad, up to this
   int max_repair_rounds = 24;                  // repair rounds (Ipopt solves) before giving up
   int stagnation_rounds = 8;                   // give up after this many rounds without a new best
+  int count_stagnation_rounds = 0;             // > 0: also after this many rounds without fewer bad faces
+                                               // (for callers with a fallback: a pose only less bad
+                                               // rarely becomes regular later)
   bool winding_repair = true;                  // with cone angles: one-rings wound a full turn off their cone are
                                                // bad faces; when the local repair leaves bad faces, one global
                                                // solve in the field's frame, then max_repair_rounds / 2 more rounds
