@@ -427,29 +427,40 @@ TEST(ParametrizationProblem, IntegerTranslationsHardPenaltyAndRelinearized) {
   EXPECT_LT(max_transition_residual(torus.mesh, r1.param), 1e-9 * param_diagonal(r1.param));
 }
 
+// A deformed 8 x 8 x 8 grid cube as a parametrization problem (edge length 1.5, the field's cut) and
+// its unconstrained map.
+struct CubeProblem {
+  test::SyntheticParametrized cube = deformed_cube();
+  FieldInput in = field_from_param(cube.mesh, cube.param, true);
+  ParametrizationProblem problem{cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.5};
+  Progress progress;
+  ParametrizationSolution free_map = problem.solve({}, progress);
+
+  static test::SyntheticParametrized deformed_cube() {
+    auto cube = test::make_grid_cube(8);
+    deform(cube.mesh, 1.0, 0.1, 4);
+    return cube;
+  }
+};
+
 TEST(ParametrizationProblem, SingularitiesAtIntegerPointsWithoutPin) {
   // Cube corners (the singularities) pinned to integer points in one of their charts; no wedge
   // pinned at the origin: the constraints fix the translation.
-  auto cube = test::make_grid_cube(8);
-  deform(cube.mesh, 1.0, 0.1, 4);
-  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
-  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.5);
-  Progress progress;
-  const ParametrizationSolution free_map = problem.solve({}, progress);
-  problem.set_pin_translation(false);
-  std::vector<char> done(cube.mesh.num_vertices(), 0);
+  CubeProblem p;
+  p.problem.set_pin_translation(false);
+  std::vector<char> done(p.cube.mesh.num_vertices(), 0);
   std::vector<int> corners;
-  for (int c = 0; c < 3 * cube.mesh.num_faces(); ++c) {
-    const int v = cube.mesh.F(c / 3, c % 3);
-    const Vec3 p = test::make_grid_cube(8).mesh.position(v);
-    const bool corner = (p.x() == 0 || p.x() == 8) && (p.y() == 0 || p.y() == 8) && (p.z() == 0 || p.z() == 8);
+  for (int c = 0; c < 3 * p.cube.mesh.num_faces(); ++c) {
+    const int v = p.cube.mesh.F(c / 3, c % 3);
+    const Vec3 x = test::make_grid_cube(8).mesh.position(v);
+    const bool corner = (x.x() == 0 || x.x() == 8) && (x.y() == 0 || x.y() == 8) && (x.z() == 0 || x.z() == 8);
     if (!corner || done[v]) continue;
     done[v] = 1;
     corners.push_back(c);
-    for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{c, a, 1.0}}, std::round(free_map.param.uv(c, a)));
+    for (int a = 0; a < 2; ++a) p.problem.add_linear_constraint({{c, a, 1.0}}, std::round(p.free_map.param.uv(c, a)));
   }
   ASSERT_EQ(corners.size(), 8u);
-  const ParametrizationSolution s = problem.solve({}, progress);
+  const ParametrizationSolution s = p.problem.solve({}, p.progress);
   EXPECT_LT(s.stats.constraint_violation, 1e-9);
   EXPECT_EQ(s.stats.flipped + s.stats.degenerate, 0);
   for (int c : corners)
@@ -457,9 +468,9 @@ TEST(ParametrizationProblem, SingularitiesAtIntegerPointsWithoutPin) {
   // Every copy of a singularity (its other wedges) lands on an integer point too: the transitions
   // carry integer points to integer points once the translations are integral... at least the
   // sanitized map must be exactly seamless.
-  const SanitizeResult ex = sanitize_parametrization(cube.mesh, s.param, SanitizeOptions{});
+  const SanitizeResult ex = sanitize_parametrization(p.cube.mesh, s.param, SanitizeOptions{});
   EXPECT_EQ(ex.unresolved_equations, 0);
-  EXPECT_EQ(exact_transition_residual(cube.mesh, ex.param), 0);
+  EXPECT_EQ(exact_transition_residual(p.cube.mesh, ex.param), 0);
 }
 
 TEST(ParametrizationProblem, CancelStopsTheIpoptRepair) {
@@ -492,25 +503,20 @@ TEST(ParametrizationProblem, CountStagnationEndsARepairThatCannotSucceed) {
   // The full budget ends with only those folded (18 rounds here); with count_stagnation_rounds the
   // repair stops one turn of the strategies after the count last dropped (5 rounds here, folds
   // around the pinned faces left): the trade a caller with a fallback makes.
-  auto cube = test::make_grid_cube(8);
-  deform(cube.mesh, 1.0, 0.1, 4);
-  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
-  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.5);
-  Progress progress;
-  const ParametrizationSolution free_map = problem.solve({}, progress);
-  ASSERT_EQ(free_map.stats.flipped + free_map.stats.degenerate, 0);
+  CubeProblem p;
+  ASSERT_EQ(p.free_map.stats.flipped + p.free_map.stats.degenerate, 0);
   const int forced_faces[] = {40, 200, 333};
   for (int f : forced_faces) {
-    const Vec2 p0(free_map.param.uv(3 * f, 0), free_map.param.uv(3 * f, 1));
+    const Vec2 p0(p.free_map.param.uv(3 * f, 0), p.free_map.param.uv(3 * f, 1));
     const Vec2 corner[3] = {p0, p0 + Vec2(0, 0.4), p0 + Vec2(0.4, 0)};  // clockwise
     for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 2; ++a) problem.add_linear_constraint({{3 * f + k, a, 1.0}}, corner[k][a]);
+      for (int a = 0; a < 2; ++a) p.problem.add_linear_constraint({{3 * f + k, a, 1.0}}, corner[k][a]);
   }
   ParametrizationSolveOptions plain;
-  const ParametrizationSolution unbounded = problem.solve(plain, progress);
+  const ParametrizationSolution unbounded = p.problem.solve(plain, p.progress);
   ParametrizationSolveOptions bounded = plain;
   bounded.count_stagnation_rounds = 4;
-  const ParametrizationSolution stopped = problem.solve(bounded, progress);
+  const ParametrizationSolution stopped = p.problem.solve(bounded, p.progress);
   for (const ParametrizationSolution* s : {&unbounded, &stopped}) {
     EXPECT_LT(s->stats.constraint_violation, 1e-9);
     EXPECT_GE(s->stats.flipped, 3);  // the pinned faces stay folded
