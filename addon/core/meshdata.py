@@ -7,9 +7,8 @@ import numpy as np
 
 
 def mesh_arrays(mesh):
-    """Vertices (n,3) float64, triangles (m,3) int32, the loop of each triangle corner (m,3) int32
-    and the polygon of each triangle (m,) int32, from a bpy Mesh (triangulated through its loop
-    triangles; n-gons stay intact), in canonical_triangle_order."""
+    """Vertices (n,3) float64, triangles (m,3) int32 and the loop of each triangle corner (m,3)
+    int32, from a bpy Mesh (triangulated through its loop triangles; n-gons stay intact)."""
     mesh.calc_loop_triangles()
     n = len(mesh.vertices)
     co = np.empty(3 * n, np.float32)
@@ -19,25 +18,7 @@ def mesh_arrays(mesh):
     mesh.loop_triangles.foreach_get("vertices", tris)
     loops = np.empty(3 * m, np.int32)
     mesh.loop_triangles.foreach_get("loops", loops)
-    polys = np.empty(m, np.int32)
-    mesh.loop_triangles.foreach_get("polygon_index", polys)
-    rows, corners = canonical_triangle_order(tris.reshape(-1, 3), loops.reshape(-1, 3))
-    triangles, triangle_loops = tris.reshape(-1, 3)[rows, corners], loops.reshape(-1, 3)[rows, corners]
-    return co.reshape(-1, 3).astype(np.float64), triangles, triangle_loops, polys[rows[:, 0]]
-
-
-def canonical_triangle_order(triangles, loops):
-    """The native pipeline's result depends on the order of the triangles it is given, and Blender
-    gives the same surface in different orders from run to run (a new UV sphere's polygons and loops
-    come in another order each time, its vertices in the same). Index arrays (rows, corners) that
-    start each triangle at its lowest vertex (its orientation kept) and sort the triangles by their
-    vertices, then loops: the same vertices and triangles always give the same arrays."""
-    first = np.argmin(triangles, axis=1)
-    corners = (first[:, None] + np.arange(3)) % 3
-    every = np.arange(len(triangles))[:, None]
-    rotated, rotated_loops = triangles[every, corners], loops[every, corners]
-    order = np.lexsort((rotated_loops[:, 0], rotated[:, 2], rotated[:, 1], rotated[:, 0]))
-    return order[:, None], corners[order]
+    return co.reshape(-1, 3).astype(np.float64), tris.reshape(-1, 3), loops.reshape(-1, 3)
 
 
 def edge_vertex_pairs(mesh, flags):

@@ -105,31 +105,6 @@ def test_carried():
     check(not attributes.is_carried("Map2", "POINT", "FLOAT2", uv_names=("Map2",)), "a UV map is not carried")
 
 
-def test_canonical_triangle_order():
-    """The same triangles given in another order, each starting at another corner (as Blender gives
-    a new UV sphere from run to run), come out as the same arrays, each triangle a rotation of
-    itself (its orientation kept), its loops following it."""
-    rng = np.random.default_rng(3)
-    triangles = np.array([[0, 1, 2], [2, 1, 3], [3, 4, 2], [4, 0, 2], [5, 6, 7], [7, 6, 5]], np.int32)
-    loops = np.arange(18, dtype=np.int32).reshape(-1, 3)
-    results = []
-    for _ in range(4):
-        shuffled = rng.permutation(len(triangles))
-        turn = (rng.integers(0, 3, len(triangles))[:, None] + np.arange(3)) % 3
-        tris = triangles[shuffled[:, None], turn]
-        lps = loops[shuffled[:, None], turn]
-        rows, corners = meshdata.canonical_triangle_order(tris, lps)
-        results.append((tris[rows, corners], lps[rows, corners]))
-    same = all(np.array_equal(r[0], results[0][0]) and np.array_equal(r[1], results[0][1]) for r in results)
-    check(same, "the same triangles in any order and rotation give the same arrays")
-    canonical, canonical_loops = results[0]
-    kept = all(any(np.array_equal(np.roll(t, k), o) for k in range(3)) for t, o in
-               zip(canonical, triangles[canonical_loops[:, 0] // 3]))
-    follow = np.array_equal(canonical, triangles.reshape(-1)[canonical_loops])
-    check(kept and follow, "each triangle keeps its orientation and its loops follow its corners")
-    check(all(t[0] == t.min() for t in canonical), "each triangle starts at its lowest vertex")
-
-
 def test_speed():
     rng = np.random.default_rng(1)
     n = 200000
@@ -147,7 +122,6 @@ def main():
     test_barycentric()
     test_values()
     test_carried()
-    test_canonical_triangle_order()
     test_speed()
     print(f"{len(failures)} failure(s)" if failures else "attributes: OK")
     return 1 if failures else 0
