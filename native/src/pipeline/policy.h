@@ -82,8 +82,8 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
 bool escalates_integer_grid_map(Job job);
 // ...and the full budget of its repair rounds. Without escalation the map's repair stops after
 // kRepairRoundsWithoutEscalation rounds (three turns of the four repair strategies), or after
-// kStagnantRoundsWithoutEscalation rounds (one turn) without fewer bad triangles: in the 27-mesh
-// sweep, maps that became regular took at most 9 Ipopt solves in all, while maps that stayed
+// kStagnantRoundsWithoutEscalation rounds (one turn) without fewer bad triangles: on 18 shared
+// meshes, maps that became regular took at most 9 Ipopt solves in all, while maps that stayed
 // flipped (their quads then come from the layout) spent up to 24 rounds, most over their whole
 // mesh: minutes on dragon and cycloidal.
 constexpr int kRepairRoundsWithoutEscalation = 12;
