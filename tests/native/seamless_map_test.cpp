@@ -450,9 +450,10 @@ TEST(ParametrizationProblem, SingularitiesAtIntegerPointsWithoutPin) {
   p.problem.set_pin_translation(false);
   std::vector<char> done(p.cube.mesh.num_vertices(), 0);
   std::vector<int> corners;
+  const TriMesh undeformed = test::make_grid_cube(8).mesh;
   for (int c = 0; c < 3 * p.cube.mesh.num_faces(); ++c) {
     const int v = p.cube.mesh.F(c / 3, c % 3);
-    const Vec3 x = test::make_grid_cube(8).mesh.position(v);
+    const Vec3 x = undeformed.position(v);
     const bool corner = (x.x() == 0 || x.x() == 8) && (x.y() == 0 || x.y() == 8) && (x.z() == 0 || x.z() == 8);
     if (!corner || done[v]) continue;
     done[v] = 1;

@@ -92,10 +92,10 @@ constexpr int kStagnantRoundsWithoutEscalation = 4;
 bool integer_grid_map_serves(const IgmResult& map, bool escalate);
 
 // The component's integer-grid map: the default attempt (its repair bounded as above unless
-// `escalate`); when `escalate` and the map has flipped
-// or degenerate triangles or wound one-rings, the re-linearized penalty attempt, then the
-// all-faces attempt, each kept only if it has fewer; finally the map untangle moves vertices where
-// flipped or degenerate triangles remain. stats.path tells the rungs taken.
+// `escalate`); when `escalate` and the map has flipped or degenerate triangles or wound one-rings,
+// the re-linearized penalty attempt, then the all-faces attempt, each kept only if it has fewer;
+// finally the map untangle moves vertices where flipped or degenerate triangles remain. stats.path
+// tells the rungs taken.
 IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress);
 
 // The round baseline's rounded map as the integer-grid map (no attempt applies).

@@ -521,8 +521,7 @@ struct RepairTrack {
   Eigen::VectorXd best_z;
   int best_round = -1;
   int rejected = 0;
-  int fewest_bad = std::numeric_limits<int>::max();  // the fewest bad faces of an accepted pose...
-  int fewest_bad_round = -1;                         // ...first reached in this round
+  int fewer_bad_round = 0;  // the last round that lowered the best pose's bad faces (0 if none did)
 };
 
 // Rotations (relative to the field) of the reference shapes of one region while they spread.
@@ -1012,6 +1011,7 @@ bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track)
     z_ = y;
     current_ = std::move(next);
     track.rejected = 0;
+    if (current_.bad() < track.best.bad()) track.fewer_bad_round = round;
     if (current_.bad() < track.best.bad() ||
         (current_.bad() == track.best.bad() && current_.depth < track.best.depth)) {
       track.best = current_;
@@ -1023,8 +1023,7 @@ bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track)
   }
   if (current_.bad() == 0) return false;
   if (round - track.best_round >= options_.stagnation_rounds) return false;  // no new best for a while
-  if (current_.bad() < track.fewest_bad) track.fewest_bad = current_.bad(), track.fewest_bad_round = round;
-  if (options_.count_stagnation_rounds > 0 && round - track.fewest_bad_round >= options_.count_stagnation_rounds)
+  if (options_.count_stagnation_rounds > 0 && round - track.fewer_bad_round >= options_.count_stagnation_rounds)
     return false;  // no fewer bad faces for a while
   widen_rings();
   return true;
