@@ -22,6 +22,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "atlas/quad_atlas.h"
 #include "core/error.h"
 #include "core/json.h"
 #include "intake/read_mesh_file.h"
@@ -78,7 +79,9 @@ void report_abnormal_ends() {
 }
 
 struct CommandLine {
-  std::string command, input, output, report, features, uv_out, layout_out, density;
+  std::string command, input, output, report, features, uv_out, layout_out, density, atlas_out;
+  int texture_size = 1024;
+  qgp::AtlasOptions atlas;
   std::string quantizer = "greedy", symmetry;
   bool no_weld = false;
   qgp::RemeshOptions options;
@@ -123,6 +126,17 @@ void add_commands(CLI::App& app, CommandLine& cl) {
                      "file's vertex order): the linear quad density there (2: quads half as long)");
   CLI::Option* uv_out =
       remesh->add_option("--uv-out", cl.uv_out, "write the integer-grid map as per-corner vt of an .obj");
+  remesh->add_option("--atlas-out", cl.atlas_out,
+                     "write the quad mesh again with a texture atlas as per-corner vt in [0,1]: every quad a square of "
+                     "whole texels, charts packed without overlap, every seam a 90-degree turn plus whole texels");
+  remesh->add_option("--texture-size", cl.texture_size, "the atlas texture's width and height in texels (default 1024)")
+      ->check(CLI::Range(1, 65536));
+  remesh
+      ->add_option("--texels-per-quad", cl.atlas.texels_per_quad,
+                   "texels along a quad's side in the atlas (default: the most for which every chart fits)")
+      ->check(CLI::Range(1, 65536));
+  remesh->add_option("--gutter", cl.atlas.gutter, "empty texels around every atlas chart (default 2)")
+      ->check(CLI::Range(0, 1024));
   remesh->add_option("--layout-out", cl.layout_out,
                      "write the T-mesh (motorcycle graph) as .obj polylines (with --symmetry: the positive half's)");
   remesh
@@ -277,6 +291,29 @@ void write_layout_output(const std::string& path, const qgp::Session& session) {
   qgp::write_layout_obj(path, meshes, tmeshes);
 }
 
+// --atlas-out: the quad mesh with its texture atlas (atlas/quad_atlas.h), and the report's "atlas"
+// object; false (with a message) when the atlas cannot be made or written.
+bool write_atlas_output(const CommandLine& cl, const qgp::Session& session, qgp::Json& report) {
+  if (cl.atlas_out.empty()) return true;
+  try {
+    qgp::AtlasOptions options = cl.atlas;
+    options.texture_width = options.texture_height = cl.texture_size;
+    const qgp::QuadAtlas atlas = qgp::build_quad_atlas(*session.quad_result(), options);
+    report["atlas"] = atlas;
+    std::ostringstream header;
+    header << "qgp quad mesh of " << cl.input << " with a texture atlas: " << atlas.texture_width << " x "
+           << atlas.texture_height << " texels, " << atlas.texels_per_quad << " per quad side, " << atlas.num_charts
+           << " charts";
+    qgp::cli::write_quad_obj(cl.atlas_out, *session.quad_result(), nullptr, {}, header.str(), &atlas.corner_uv);
+    std::cout << "atlas: " << atlas.num_charts << " charts, " << atlas.texels_per_quad << " texels per quad, "
+              << static_cast<int>(100 * atlas.texture_use + 0.5) << " % of the texture used\n";
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "qgp: " << e.what() << "\n";
+    return false;
+  }
+}
+
 // Writes whatever the session has for the optional outputs; false if a requested one could not be
 // written (with a message). After a failed run (run_failed) an output the run did not get to is
 // named but is not a write failure: the run's own error decides the exit code.
@@ -384,6 +421,7 @@ int run(const CommandLine& cl) {
       std::cerr << "qgp: " << e.what() << "\n";
       written = false;
     }
+    written = write_atlas_output(cl, *session, report) && written;
     print_remesh_summary(report);
     print_rescued_components(report);
   }

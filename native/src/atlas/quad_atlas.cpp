@@ -1,0 +1,369 @@
+#include "atlas/quad_atlas.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "core/error.h"
+
+namespace qgp {
+namespace {
+
+using Point = std::array<int, 2>;  // a corner of the integer grid (chart or texture cells)
+
+uint64_t point_key(const Point& p) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(p[0])) << 32) | static_cast<uint32_t>(p[1]);
+}
+
+// Per quad side (4q + k: from corner k to k + 1), the side of the quad across it (4q' + k'), or -1
+// on the boundary and where an edge has more than two quads or two quads facing the same way.
+std::vector<int> quad_neighbours(const QuadMesh& quads) {
+  std::unordered_map<uint64_t, std::vector<int>> sides;
+  for (int q = 0; q < quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      sides[point_key({std::min(a, b), std::max(a, b)})].push_back(4 * q + k);
+    }
+  std::vector<int> across(4 * quads.num_quads(), -1);
+  for (const auto& [key, list] : sides) {
+    if (list.size() != 2) continue;
+    const int s = list[0], t = list[1];
+    if (quads.Q(s / 4, s % 4) != quads.Q(t / 4, (t % 4 + 1) % 4)) continue;  // same direction: not oriented
+    across[s] = t;
+    across[t] = s;
+  }
+  return across;
+}
+
+// Quads around each vertex, and whether the vertex is on the boundary (a side without a quad across).
+struct VertexStar {
+  std::vector<int> quads;
+  std::vector<char> boundary;
+};
+
+VertexStar vertex_stars(const QuadMesh& quads, const std::vector<int>& across) {
+  VertexStar star{std::vector<int>(quads.num_vertices(), 0), std::vector<char>(quads.num_vertices(), 0)};
+  for (int q = 0; q < quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      ++star.quads[quads.Q(q, k)];
+      if (across[4 * q + k] < 0) star.boundary[quads.Q(q, k)] = star.boundary[quads.Q(q, (k + 1) % 4)] = 1;
+    }
+  return star;
+}
+
+// Marks the sides along the separatrices of the quad mesh's irregular vertices (inside: not 4 quads;
+// on the boundary: not 2), traced as a motorcycle graph: every trace goes straight through regular
+// vertices, one edge per round, and stops at the boundary, an irregular vertex or a vertex another
+// trace has reached. The regions between them are grid rectangles (the layout's patches), so charts
+// grown inside them are compact. Returns per side (4q + k) 1 where it is cut.
+std::vector<char> separatrix_cuts(const QuadMesh& quads, const std::vector<int>& across) {
+  const VertexStar star = vertex_stars(quads, across);
+  auto irregular = [&](int v) { return star.quads[v] != (star.boundary[v] ? 2 : 4); };
+  std::vector<char> cut(across.size(), 0), reached(quads.num_vertices(), 0);
+  std::vector<int> traces;  // the next side to cut per running trace: Q[k] = its start, Q[k + 1] = its end
+  for (int q = 0; q < quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k)
+      if (irregular(quads.Q(q, k))) {
+        traces.push_back(4 * q + k);
+        reached[quads.Q(q, k)] = 1;
+      }
+  while (!traces.empty()) {
+    std::vector<int> running;
+    for (int side : traces) {
+      if (cut[side]) continue;  // another trace took this edge (the other way, or from the same vertex)
+      cut[side] = 1;
+      if (across[side] >= 0) cut[across[side]] = 1;
+      const int end = quads.Q(side / 4, (side % 4 + 1) % 4);
+      if (reached[end] || star.boundary[end] || irregular(end)) continue;
+      reached[end] = 1;
+      const int turn = across[4 * (side / 4) + (side % 4 + 1) % 4];  // the side after `end` in the next quad
+      if (turn >= 0) running.push_back(4 * (turn / 4) + (turn % 4 + 1) % 4);
+    }
+    traces = std::move(running);
+  }
+  return cut;
+}
+
+// Charts grown over the quads: chart of every quad, and the grid corner of every quad corner.
+struct Charts {
+  std::vector<int> quad_chart;
+  std::vector<Point> corner;  // 4q + k
+  int count = 0;
+};
+
+// The four corners of the cell across side k of a placed quad, for the quad whose side k2 is that edge.
+std::array<Point, 4> corners_across(const std::array<Point, 4>& placed, int k, int k2) {
+  const Point a = placed[k], b = placed[(k + 1) % 4];
+  const Point out = {b[1] - a[1], a[0] - b[0]};  // right of a -> b, away from the placed cell
+  std::array<Point, 4> result;
+  result[k2] = b;
+  result[(k2 + 1) % 4] = a;
+  result[(k2 + 2) % 4] = {a[0] + out[0], a[1] + out[1]};
+  result[(k2 + 3) % 4] = {b[0] + out[0], b[1] + out[1]};
+  return result;
+}
+
+Point cell_of(const std::array<Point, 4>& c) {
+  return {std::min({c[0][0], c[1][0], c[2][0], c[3][0]}), std::min({c[0][1], c[1][1], c[2][1], c[3][1]})};
+}
+
+// One chart being grown: its occupied cells, and the one place of each vertex and at each point.
+class ChartGrowth {
+ public:
+  explicit ChartGrowth(const QuadMesh& quads) : quads_(quads) {}
+  bool fits(int q, const std::array<Point, 4>& c) const {
+    if (cells_.count(point_key(cell_of(c)))) return false;
+    for (int k = 0; k < 4; ++k) {
+      const auto v = vertex_at_.find(point_key(c[k]));
+      if (v != vertex_at_.end() && v->second != quads_.Q(q, k)) return false;
+      const auto p = place_of_.find(quads_.Q(q, k));
+      if (p != place_of_.end() && p->second != c[k]) return false;
+    }
+    return true;
+  }
+  void add(int q, const std::array<Point, 4>& c) {
+    cells_.insert(point_key(cell_of(c)));
+    for (int k = 0; k < 4; ++k) {
+      vertex_at_[point_key(c[k])] = quads_.Q(q, k);
+      place_of_[quads_.Q(q, k)] = c[k];
+    }
+  }
+
+ private:
+  const QuadMesh& quads_;
+  std::unordered_set<uint64_t> cells_;
+  std::unordered_map<uint64_t, int> vertex_at_;
+  std::unordered_map<int, Point> place_of_;
+};
+
+void grow_chart(const QuadMesh& quads, const std::vector<int>& across, const std::vector<char>& cut, int seed,
+                Charts& charts) {
+  const int id = charts.count++;
+  ChartGrowth growth(quads);
+  auto place = [&](int q, const std::array<Point, 4>& c) {
+    growth.add(q, c);
+    charts.quad_chart[q] = id;
+    for (int k = 0; k < 4; ++k) charts.corner[4 * q + k] = c[k];
+  };
+  place(seed, {Point{0, 0}, Point{1, 0}, Point{1, 1}, Point{0, 1}});
+  std::deque<int> queue = {seed};
+  while (!queue.empty()) {
+    const int q = queue.front();
+    queue.pop_front();
+    std::array<Point, 4> placed;
+    for (int k = 0; k < 4; ++k) placed[k] = charts.corner[4 * q + k];
+    for (int k = 0; k < 4; ++k) {
+      const int side = across[4 * q + k];
+      if (side < 0 || cut[4 * q + k] || charts.quad_chart[side / 4] >= 0) continue;
+      const std::array<Point, 4> c = corners_across(placed, k, side % 4);
+      if (!growth.fits(side / 4, c)) continue;
+      place(side / 4, c);
+      queue.push_back(side / 4);
+    }
+  }
+}
+
+Charts grow_charts(const QuadMesh& quads) {
+  const std::vector<int> across = quad_neighbours(quads);
+  const std::vector<char> cut = separatrix_cuts(quads, across);
+  Charts charts;
+  charts.quad_chart.assign(quads.num_quads(), -1);
+  charts.corner.resize(4 * quads.num_quads());
+  for (int q = 0; q < quads.num_quads(); ++q)
+    if (charts.quad_chart[q] < 0) grow_chart(quads, across, cut, q, charts);
+  return charts;
+}
+
+Point rotate(const Point& p, int turns) {  // by turns * 90 degrees, counter-clockwise
+  Point r = p;
+  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
+  return r;
+}
+
+// The lowest corner and the size (in cells) of the chart's corners turned by `turns` * 90 degrees.
+void turned_bounds(const Charts& charts, const std::vector<int>& quads, int turns, Point* lo, Point* size) {
+  *lo = {INT32_MAX, INT32_MAX};
+  Point hi{INT32_MIN, INT32_MIN};
+  for (int q : quads)
+    for (int k = 0; k < 4; ++k) {
+      const Point r = rotate(charts.corner[4 * q + k], turns);
+      for (int d = 0; d < 2; ++d) {
+        (*lo)[d] = std::min((*lo)[d], r[d]);
+        hi[d] = std::max(hi[d], r[d]);
+      }
+    }
+  *size = {hi[0] - (*lo)[0], hi[1] - (*lo)[1]};
+}
+
+// Where each chart goes: the texel its turned bounding box starts at, and its turns.
+struct Placement {
+  Point offset{0, 0};
+  int turns = 0;
+};
+
+// Bottom-left packing of rectangles into a width x height texture: the skyline (the height of the
+// packed area over each column range) as segments (first column, height), left to right.
+class Skyline {
+ public:
+  Skyline(int width, int height) : width_(width), height_(height), segments_{{0, 0}} {}
+  // The placement of a w x h rectangle whose top is lowest (then leftmost), or false.
+  bool find(int w, int h, Point* at) const {
+    bool found = false;
+    int best_top = 0;
+    for (size_t i = 0; i < segments_.size(); ++i) {
+      const int x = segments_[i][0];
+      if (x + w > width_) break;
+      int y = 0;
+      for (size_t j = i; j < segments_.size() && segments_[j][0] < x + w; ++j) y = std::max(y, segments_[j][1]);
+      if (y + h > height_ || (found && y + h >= best_top)) continue;
+      found = true;
+      best_top = y + h;
+      *at = {x, y};
+    }
+    return found;
+  }
+  void add(const Point& at, int w, int h) {
+    std::vector<Point> next;
+    const int end = at[0] + w;
+    int height_at_end = 0;
+    for (const Point& s : segments_)
+      if (s[0] <= end) height_at_end = s[1];
+    for (const Point& s : segments_)
+      if (s[0] < at[0]) next.push_back(s);
+    next.push_back({at[0], at[1] + h});
+    if (end < width_) next.push_back({end, height_at_end});
+    for (const Point& s : segments_)
+      if (s[0] > end) next.push_back(s);
+    segments_.clear();
+    for (const Point& s : next)  // merge equal neighbours
+      if (segments_.empty() || segments_.back()[1] != s[1]) segments_.push_back(s);
+  }
+
+ private:
+  int width_, height_;
+  std::vector<Point> segments_;
+};
+
+// Packs the charts (tallest first) at k texels per quad side with `gutter` texels right of and
+// above each; false when one does not fit.
+bool pack_charts(const Charts& charts, const std::vector<std::vector<int>>& chart_quads, int width, int height, int k,
+                 int gutter, std::vector<Placement>* placements) {
+  std::vector<Point> size(chart_quads.size()), lo(chart_quads.size());
+  std::vector<int> order(chart_quads.size());
+  for (size_t c = 0; c < order.size(); ++c) {
+    order[c] = static_cast<int>(c);
+    turned_bounds(charts, chart_quads[c], 0, &lo[c], &size[c]);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return std::max(size[a][0], size[a][1]) > std::max(size[b][0], size[b][1]); });
+  Skyline skyline(width, height);
+  placements->assign(chart_quads.size(), Placement{});
+  for (int c : order) {
+    Point best{0, 0};
+    int best_turns = -1;
+    for (int turns = 0; turns < 2; ++turns) {
+      const int w = k * size[c][turns] + gutter, h = k * size[c][1 - turns] + gutter;
+      Point at;
+      if (!skyline.find(w, h, &at)) continue;
+      const int top = at[1] + h;
+      if (best_turns >= 0 && top >= best[1] + k * size[c][1 - best_turns] + gutter) continue;
+      best = at;
+      best_turns = turns;
+    }
+    if (best_turns < 0) return false;
+    skyline.add(best, k * size[c][best_turns] + gutter, k * size[c][1 - best_turns] + gutter);
+    (*placements)[c] = {best, best_turns};
+  }
+  return true;
+}
+
+// Corner coordinates in [0,1]^2 of every quad, from the charts' placements.
+void write_corner_uv(const Charts& charts, const std::vector<std::vector<int>>& chart_quads,
+                     const std::vector<Placement>& placements, int texels, QuadAtlas& atlas) {
+  atlas.corner_uv.resize(4 * static_cast<int>(charts.quad_chart.size()), 2);
+  for (size_t c = 0; c < chart_quads.size(); ++c) {
+    const Placement& p = placements[c];
+    Point lo, size;
+    turned_bounds(charts, chart_quads[c], p.turns, &lo, &size);
+    for (int q : chart_quads[c])
+      for (int k = 0; k < 4; ++k) {
+        const Point r = rotate(charts.corner[4 * q + k], p.turns);
+        atlas.corner_uv(4 * q + k, 0) = double(texels * (r[0] - lo[0]) + p.offset[0]) / atlas.texture_width;
+        atlas.corner_uv(4 * q + k, 1) = double(texels * (r[1] - lo[1]) + p.offset[1]) / atlas.texture_height;
+      }
+  }
+}
+
+int count_seam_edges(const QuadMesh& quads, const std::vector<int>& quad_chart) {
+  const std::vector<int> across = quad_neighbours(quads);
+  int seams = 0;
+  for (size_t s = 0; s < across.size(); ++s)
+    if (across[s] > static_cast<int>(s) && quad_chart[s / 4] != quad_chart[across[s] / 4]) ++seams;
+  return seams;
+}
+
+std::string size_text(int w, int h) { return std::to_string(w) + " x " + std::to_string(h); }
+
+void check_options(const QuadMesh& quads, const AtlasOptions& o) {
+  if (o.texture_width <= 0 || o.texture_height <= 0 || o.texels_per_quad < 0 || o.gutter < 0)
+    throw Error(ErrorCode::InvalidArgument, "atlas: texture " + size_text(o.texture_width, o.texture_height) + ", " +
+                                                std::to_string(o.texels_per_quad) + " texels per quad and a " +
+                                                std::to_string(o.gutter) +
+                                                "-texel gutter: sizes must be positive (texels per quad 0: chosen)");
+  if (quads.num_quads() == 0) throw Error(ErrorCode::InvalidArgument, "atlas: the quad mesh has no quads");
+}
+
+}  // namespace
+
+QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
+  check_options(quads, options);
+  const Charts charts = grow_charts(quads);
+  std::vector<std::vector<int>> chart_quads(charts.count);
+  for (int q = 0; q < quads.num_quads(); ++q) chart_quads[charts.quad_chart[q]].push_back(q);
+  const int W = options.texture_width, H = options.texture_height;
+  const int largest = std::max(1, static_cast<int>(std::sqrt(double(W) * H / quads.num_quads())));
+  auto fits = [&](int k, std::vector<Placement>* placements) {
+    return pack_charts(charts, chart_quads, W, H, k, options.gutter, placements);
+  };
+  std::vector<Placement> placements;
+  int k = options.texels_per_quad;
+  if (k == 0) {  // the largest K that packs: a binary search (smaller squares pack at least as well)
+    int lo = 0, hi = largest;
+    while (lo < hi) {
+      const int mid = (lo + hi + 1) / 2;
+      if (fits(mid, &placements))
+        lo = mid;
+      else
+        hi = mid - 1;
+    }
+    k = std::max(lo, 1);
+  }
+  if (!fits(k, &placements))
+    throw Error(ErrorCode::InvalidArgument,
+                "atlas: " + std::to_string(charts.count) + " charts of " + std::to_string(quads.num_quads()) +
+                    " quads do not fit a " + size_text(W, H) + " texture at " + std::to_string(k) +
+                    " texel(s) per quad with the gutter; ask for a larger texture or fewer quads");
+  QuadAtlas atlas;
+  atlas.quad_chart = charts.quad_chart;
+  atlas.num_charts = charts.count;
+  atlas.texels_per_quad = k;
+  atlas.texture_width = W;
+  atlas.texture_height = H;
+  write_corner_uv(charts, chart_quads, placements, k, atlas);
+  atlas.seam_edges = count_seam_edges(quads, charts.quad_chart);
+  atlas.texture_use = double(quads.num_quads()) * k * k / (double(W) * H);
+  return atlas;
+}
+
+void to_json(Json& j, const QuadAtlas& a) {
+  j = Json{{"charts", a.num_charts},           {"texels_per_quad", a.texels_per_quad},
+           {"texture_width", a.texture_width}, {"texture_height", a.texture_height},
+           {"seam_edges", a.seam_edges},       {"texture_use", a.texture_use}};
+}
+
+}  // namespace qgp

@@ -1,0 +1,46 @@
+// A texture atlas for a quad mesh: every quad becomes one square of K x K texels, charts of quads
+// are laid out on the texel grid without overlap, and every seam maps the texel grid of one side
+// onto that of the other (a rotation by a multiple of 90 degrees plus a whole number of texels).
+//
+// Charts grow quad by quad over shared edges, each quad a unit cell of the chart's integer grid
+// placed beside the quad it was reached from; a quad joins only where its cell is free and each of
+// its vertices has one place in the chart (so a chart stops at the irregular vertices it would wind
+// around), and never across a separatrix of the quad mesh's irregular vertices (traced as a
+// motorcycle graph), so charts are the layout's grid rectangles. A chart is injective and its cells
+// are whole quads. Charts are packed bottom-left into the texture at whole-texel offsets, turned by
+// 0 or 90 degrees, longest first, with `gutter` empty texels between charts.
+#pragma once
+#include <vector>
+
+#include "core/json.h"
+#include "core/quad_mesh.h"
+
+namespace qgp {
+
+struct AtlasOptions {
+  int texture_width = 1024, texture_height = 1024;
+  int texels_per_quad = 0;  // K; 0: the largest K for which every chart fits
+  int gutter = 2;           // empty texels between charts
+};
+
+struct QuadAtlas {
+  // Per quad corner (row 4q + k: corner k of quad q), the atlas coordinate in [0,1]^2: texel
+  // (x, y) of the texture spans [x/W, (x+1)/W] x [y/H, (y+1)/H].
+  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> corner_uv;
+  std::vector<int> quad_chart;  // #Q: the chart of each quad
+  int num_charts = 0;
+  int texels_per_quad = 0;
+  int texture_width = 0, texture_height = 0;
+  int seam_edges = 0;        // quad edges whose two quads lie in different charts
+  double texture_use = 0.0;  // texels covered by quads / all texels
+};
+
+// quads: a quad mesh, counter-clockwise (edges with more than two quads are treated as seams).
+// Throws Error(InvalidArgument) when the texture size or K is not positive, or when the charts do
+// not fit the texture at the K asked (or at K = 1), naming the sizes.
+QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options);
+
+// The "atlas" object of the JSON report.
+void to_json(Json& j, const QuadAtlas& atlas);
+
+}  // namespace qgp
