@@ -9,20 +9,20 @@ edge-manifold, the input's Euler characteristic, as many faces as the report say
 features from --sharp-angle and --features (counted here independently from the input's dihedral
 angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, and the
 welding of a triangle soup (--no-weld), a many-part mesh some of whose parts' layouts give no quads
-(rescued, exit 0), a non-orientable part (exit 5, kept as triangles), and the same quads whatever
-the order of the input's faces; --atlas-out's texture atlas.
+(rescued, exit 0), a non-orientable part (exit 5, kept as triangles), and --atlas-out's texture
+atlas.
 """
 import argparse
 import json
 import math
 import os
-import random
 import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
 from shapes import grid_cube, moebius_strip, write_obj  # noqa: E402
+from test_cli_uv_out import read_obj as read_obj_vt  # noqa: E402
 
 FAILURES = []
 
@@ -355,50 +355,6 @@ def test_rescued_parts(qgp, meshes, tmp):
           "report: a rescued part has no extraction entry (null)")
 
 
-def shuffled_obj(src, dst, seed):
-    """src's faces in a random order, each started at a random corner (orientation kept)."""
-    rng = random.Random(seed)
-    lines = open(src).read().splitlines(keepends=True)
-    faces = [line for line in lines if line.startswith("f ")]
-    rng.shuffle(faces)
-    rotated = []
-    for face in faces:
-        corners = face.split()[1:]
-        k = rng.randrange(len(corners))
-        rotated.append("f " + " ".join(corners[k:] + corners[:k]) + "\n")
-    with open(dst, "w") as f:
-        f.writelines([line for line in lines if not line.startswith("f ")] + rotated)
-
-
-def test_face_order(qgp, meshes, tmp):
-    """The same surface with its faces in another order (and each from another corner) gives the same
-    quads, byte for byte: Blender hands the add-on a new mesh's polygons in a different order each run."""
-    for name, extra in (("spot", []), ("fandisk", ["--sharp-angle", 40])):
-        outputs = []
-        for seed in (None, 1, 2):
-            path = os.path.join(meshes, name + ".obj")
-            if seed is not None:
-                shuffled_obj(path, os.path.join(tmp, f"{name}_{seed}.obj"), seed)
-                path = os.path.join(tmp, f"{name}_{seed}.obj")
-            out = os.path.join(tmp, f"{name}_{seed}_quads.obj")
-            proc = run(qgp, "remesh", path, "-o", out, "--faces", 500, *extra)
-            outputs.append(open(out).read().split("\n", 1)[1] if proc.returncode == 0 else proc.stderr)
-        check(outputs[0] == outputs[1] == outputs[2] and outputs[0].count("\nf ") > 400,
-              f"{name} with its faces shuffled twice: the same quads, byte for byte")
-
-
-def read_obj_uv(path):
-    """The vt lines of an OBJ, and per face its corners' vt indices (0-based; None without)."""
-    vt, corners = [], []
-    for line in open(path):
-        parts = line.split()
-        if parts and parts[0] == "vt":
-            vt.append((float(parts[1]), float(parts[2])))
-        elif parts and parts[0] == "f":
-            corners.append([int(p.split("/")[1]) - 1 if "/" in p else None for p in parts[1:]])
-    return vt, corners
-
-
 def test_atlas_out(qgp, meshes, tmp):
     """--atlas-out: the quad mesh again, every corner with a vt in [0,1] on whole texels of the
     texture asked, each quad a square of the report's texels per quad; a texture too small: exit 1."""
@@ -408,7 +364,8 @@ def test_atlas_out(qgp, meshes, tmp):
     r = json.load(open(report))
     check(proc.returncode == 0 and r["atlas"]["texture_width"] == 512 and r["atlas"]["charts"] >= 1
           and "atlas: " in proc.stdout, f"--atlas-out: exit 0, the report's atlas {r.get('atlas')}")
-    vt, corners = read_obj_uv(atlas)
+    vt, faces = read_obj_vt(atlas)
+    corners = [[c[1] if len(c) > 1 else None for c in f] for f in faces]
     _, quads, _ = read_obj(atlas)
     _, plain, _ = read_obj(out)
     check(quads == plain and all(None not in c for c in corners), "--atlas-out: the same quads, every corner a vt")
@@ -456,7 +413,7 @@ def main():
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
                      test_quad_count, test_symmetry, test_sizing,
                      test_features, test_drop_bad_components, test_weld, test_rescued_parts, test_non_orientable_part,
-                     test_face_order, test_atlas_out):
+                     test_atlas_out):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)
