@@ -168,8 +168,7 @@ void grow_chart(const QuadMesh& quads, const std::vector<int>& across, const std
   }
 }
 
-Charts grow_charts(const QuadMesh& quads) {
-  const std::vector<int> across = quad_neighbours(quads);
+Charts grow_charts(const QuadMesh& quads, const std::vector<int>& across) {
   const std::vector<char> cut = separatrix_cuts(quads, across);
   Charts charts;
   charts.quad_chart.assign(quads.num_quads(), -1);
@@ -249,20 +248,16 @@ class Skyline {
   std::vector<Point> segments_;
 };
 
-// Packs the charts (tallest first) at k texels per quad side with `gutter` texels right of and
+// Packs charts of the given sizes in cells (longest first) at k texels per quad side with `gutter` texels right of and
 // above each; false when one does not fit.
-bool pack_charts(const Charts& charts, const std::vector<std::vector<int>>& chart_quads, int width, int height, int k,
-                 int gutter, std::vector<Placement>* placements) {
-  std::vector<Point> size(chart_quads.size()), lo(chart_quads.size());
-  std::vector<int> order(chart_quads.size());
-  for (size_t c = 0; c < order.size(); ++c) {
-    order[c] = static_cast<int>(c);
-    turned_bounds(charts, chart_quads[c], 0, &lo[c], &size[c]);
-  }
+bool pack_charts(const std::vector<Point>& size, int width, int height, int k, int gutter,
+                 std::vector<Placement>* placements) {
+  std::vector<int> order(size.size());
+  for (size_t c = 0; c < order.size(); ++c) order[c] = static_cast<int>(c);
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return std::max(size[a][0], size[a][1]) > std::max(size[b][0], size[b][1]); });
   Skyline skyline(width, height);
-  placements->assign(chart_quads.size(), Placement{});
+  placements->assign(size.size(), Placement{});
   for (int c : order) {
     Point best{0, 0};
     int best_turns = -1;
@@ -299,8 +294,7 @@ void write_corner_uv(const Charts& charts, const std::vector<std::vector<int>>& 
   }
 }
 
-int count_seam_edges(const QuadMesh& quads, const std::vector<int>& quad_chart) {
-  const std::vector<int> across = quad_neighbours(quads);
+int count_seam_edges(const std::vector<int>& across, const std::vector<int>& quad_chart) {
   int seams = 0;
   for (size_t s = 0; s < across.size(); ++s)
     if (across[s] > static_cast<int>(s) && quad_chart[s / 4] != quad_chart[across[s] / 4]) ++seams;
@@ -322,13 +316,19 @@ void check_options(const QuadMesh& quads, const AtlasOptions& o) {
 
 QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
   check_options(quads, options);
-  const Charts charts = grow_charts(quads);
+  const std::vector<int> across = quad_neighbours(quads);
+  const Charts charts = grow_charts(quads, across);
   std::vector<std::vector<int>> chart_quads(charts.count);
   for (int q = 0; q < quads.num_quads(); ++q) chart_quads[charts.quad_chart[q]].push_back(q);
+  std::vector<Point> chart_size(charts.count);  // unturned bounding boxes, in cells
+  for (int c = 0; c < charts.count; ++c) {
+    Point lo;
+    turned_bounds(charts, chart_quads[c], 0, &lo, &chart_size[c]);
+  }
   const int W = options.texture_width, H = options.texture_height;
   const int largest = std::max(1, static_cast<int>(std::sqrt(double(W) * H / quads.num_quads())));
   auto fits = [&](int k, std::vector<Placement>* placements) {
-    return pack_charts(charts, chart_quads, W, H, k, options.gutter, placements);
+    return pack_charts(chart_size, W, H, k, options.gutter, placements);
   };
   std::vector<Placement> placements;
   int k = options.texels_per_quad;
@@ -355,7 +355,7 @@ QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
   atlas.texture_width = W;
   atlas.texture_height = H;
   write_corner_uv(charts, chart_quads, placements, k, atlas);
-  atlas.seam_edges = count_seam_edges(quads, charts.quad_chart);
+  atlas.seam_edges = count_seam_edges(across, charts.quad_chart);
   atlas.texture_use = double(quads.num_quads()) * k * k / (double(W) * H);
   return atlas;
 }
