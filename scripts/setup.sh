@@ -7,6 +7,7 @@ PACKAGES=(
   clang libclang-rt-14-dev             # fuzzing (libFuzzer) and sanitizers
   libeigen3-dev libopenmesh-dev coinor-libipopt-dev libsuitesparse-dev libgmp-dev nlohmann-json3-dev
   libcli11-dev                         # the CLI's argument parser
+  libpng-dev                           # qgp stitch: PNG images
   libgtest-dev                         # tests
   blender python3 python3-numpy python3-matplotlib   # add-on, Blender tests, benchmarks
   python3-venv                         # scripts/setup_bpy.sh: Blender 4.5 and 5.0 as Python modules

@@ -30,6 +30,7 @@
 #include "pipeline/layout_lines.h"
 #include "pipeline/session.h"
 #include "pipeline/uv_mesh.h"
+#include "stitch_command.h"
 #include "tmesh/tmesh_system.h"
 
 namespace {
@@ -85,13 +86,25 @@ struct CommandLine {
   std::string quantizer = "greedy", symmetry;
   bool no_weld = false;
   qgp::RemeshOptions options;
+  qgp::cli::StitchCommand stitch;
 };
+
+void add_stitch_command(CLI::App& app, qgp::cli::StitchCommand& stitch) {
+  CLI::App* command = app.add_subcommand(
+      "stitch", "Fill the gutters of an image in a texture atlas from across each seam, so seams do not show");
+  command->add_option("ATLAS", stitch.atlas, "the mesh with its atlas as per-corner vt (.obj, e.g. from --atlas-out)")
+      ->required();
+  command->add_option("IMAGE", stitch.image, "the image in that atlas (.png, baked or painted)")->required();
+  command->add_option("-o,--output", stitch.output, "the stitched image to write (.png)")->required();
+  command->add_option("--report", stitch.report, "write a JSON report here");
+}
 
 // The `info` and `remesh` commands and their options (CLI11); --help on each describes them.
 void add_commands(CLI::App& app, CommandLine& cl) {
   app.require_subcommand(1);
   CLI::App* info = app.add_subcommand("info", "Read, validate and repair a mesh; print what was found");
   CLI::App* remesh = app.add_subcommand("remesh", "Turn a triangle mesh into a pure-quad mesh");
+  add_stitch_command(app, cl.stitch);
   for (CLI::App* command : {info, remesh}) {
     command->add_option("IN", cl.input, "input mesh: .obj, .ply or .off")->required();
     command->add_option("--report", cl.report, "write the JSON report here (also when the run fails)");
@@ -135,8 +148,13 @@ void add_commands(CLI::App& app, CommandLine& cl) {
       ->add_option("--texels-per-quad", cl.atlas.texels_per_quad,
                    "texels along a quad's side in the atlas (default: the most for which every chart fits)")
       ->check(CLI::Range(1, 65536));
-  remesh->add_option("--gutter", cl.atlas.gutter, "empty texels around every atlas chart (default 2)")
+  remesh->add_option("--gutter", cl.atlas.gutter, "empty texels between atlas charts (default 2)")
       ->check(CLI::Range(0, 1024));
+  remesh
+      ->add_option("--mip-levels", cl.atlas.mip_levels,
+                   "keep the atlas seam-free at mip levels 1 to L too: texels per quad a power of two of at least "
+                   "2^L, charts at multiples of 2^L texels, a gutter of at least 2^(L+1) (default 0)")
+      ->check(CLI::Range(0, 8));
   remesh->add_option("--layout-out", cl.layout_out,
                      "write the T-mesh (motorcycle graph) as .obj polylines (with --symmetry: the positive half's)");
   remesh
@@ -173,7 +191,7 @@ bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
     *exit_code = 1;
     return false;
   }
-  cl->command = app.got_subcommand("info") ? "info" : "remesh";
+  cl->command = app.got_subcommand("info") ? "info" : app.got_subcommand("stitch") ? "stitch" : "remesh";
   cl->options.quantizer = qgp::parse_quantizer(cl->quantizer);
   cl->options.symmetry = qgp::parse_symmetry_axes(cl->symmetry);
   if (cl->no_weld) cl->options.weld_tolerance = 0;
@@ -439,7 +457,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   if (!parse(argc, argv, &cl, &exit_code)) return exit_code;
   try {
-    return run(cl);
+    return cl.command == "stitch" ? qgp::cli::run_stitch(cl.stitch) : run(cl);
   } catch (const std::exception& e) {
     std::cerr << "qgp: internal error: " << e.what() << "\n";
     return 4;

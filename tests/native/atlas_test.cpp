@@ -129,22 +129,11 @@ QuadAtlas checked_atlas(const QuadMesh& quads, const AtlasOptions& options, cons
   return a;
 }
 
-std::unique_ptr<Session> remeshed(const std::string& name, double target, double sharp_angle) {
-  auto session = std::make_unique<Session>(read_mesh_file(test::mesh_path(name)));
-  RemeshOptions options;
-  options.target_faces = target;
-  options.sharp_angle_deg = sharp_angle;
-  session->set_options(options);
-  Progress progress;
-  session->run(Job::Remesh, progress);
-  return session;
-}
-
 // The pipeline's own quads: rectangles of the layout pack well.
 TEST(QuadAtlas, RemeshedMeshes) {
   for (const auto& [name, sharp_angle] :
        {std::pair{"spot.obj", -1.0}, {"fandisk.obj", 40.0}, {"camelhead.off", -1.0}}) {
-    const std::unique_ptr<Session> session = remeshed(name, 1000, sharp_angle);
+    const std::unique_ptr<Session> session = test::remeshed_session(name, 1000, sharp_angle);
     const QuadAtlas a = checked_atlas(*session->quad_result(), AtlasOptions{}, name);
     EXPECT_GT(a.texture_use, 0.6) << name;
   }

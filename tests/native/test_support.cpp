@@ -195,6 +195,17 @@ std::string run_until_stage(Session& session, const std::string& stage) {
   return "stage '" + stage + "' did not start";
 }
 
+std::unique_ptr<Session> remeshed_session(const std::string& name, double target, double sharp_angle) {
+  auto session = std::make_unique<Session>(read_mesh_file(mesh_path(name)));
+  RemeshOptions options;
+  options.target_faces = target;
+  options.sharp_angle_deg = sharp_angle;
+  session->set_options(options);
+  Progress progress;
+  session->run(Job::Remesh, progress);
+  return session;
+}
+
 PolygonSoup polygon_soup(const QuadMesh& quads) {
   PolygonSoup soup;
   for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());

@@ -1,6 +1,7 @@
 // Shared helpers for the GoogleTest suites: the shared mesh set and small synthetic meshes with
 // known seamless parametrizations.
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,9 @@ void infer_rotations(const TriMesh& mesh, Parametrization& param);
 // Runs the session's remesh job until `stage` begins (cancelling it there); returns the error
 // message of a failure before that stage, "" when every earlier stage completed.
 std::string run_until_stage(Session& session, const std::string& stage);
+
+// A shared mesh remeshed to about `target` quads (sharp_angle < 0: no sharp edges as features).
+std::unique_ptr<Session> remeshed_session(const std::string& name, double target, double sharp_angle = -1);
 
 // The quads as a polygon soup (for measure_polygon_mesh).
 PolygonSoup polygon_soup(const QuadMesh& quads);

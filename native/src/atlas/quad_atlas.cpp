@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -248,8 +249,8 @@ class Skyline {
   std::vector<Point> segments_;
 };
 
-// Packs charts of the given sizes in cells (longest first) at k texels per quad side with `gutter` texels right of and
-// above each; false when one does not fit.
+// Packs charts of the given sizes in cells (longest first) at k texels per quad side, each in a rectangle `gutter`
+// texels wider and higher (the chart goes gutter / 2 texels in); false when one does not fit.
 bool pack_charts(const std::vector<Point>& size, int width, int height, int k, int gutter,
                  std::vector<Placement>* placements) {
   std::vector<int> order(size.size());
@@ -288,8 +289,9 @@ void write_corner_uv(const Charts& charts, const std::vector<std::vector<int>>& 
     for (int q : chart_quads[c])
       for (int k = 0; k < 4; ++k) {
         const Point r = rotate(charts.corner[4 * q + k], p.turns);
-        atlas.corner_uv(4 * q + k, 0) = double(texels * (r[0] - lo[0]) + p.offset[0]) / atlas.texture_width;
-        atlas.corner_uv(4 * q + k, 1) = double(texels * (r[1] - lo[1]) + p.offset[1]) / atlas.texture_height;
+        const int margin = atlas.gutter / 2;  // the chart's own share of the gutter, left of and below it
+        atlas.corner_uv(4 * q + k, 0) = double(texels * (r[0] - lo[0]) + p.offset[0] + margin) / atlas.texture_width;
+        atlas.corner_uv(4 * q + k, 1) = double(texels * (r[1] - lo[1]) + p.offset[1] + margin) / atlas.texture_height;
       }
   }
 }
@@ -309,7 +311,49 @@ void check_options(const QuadMesh& quads, const AtlasOptions& o) {
                                                 std::to_string(o.texels_per_quad) + " texels per quad and a " +
                                                 std::to_string(o.gutter) +
                                                 "-texel gutter: sizes must be positive (texels per quad 0: chosen)");
+  if (o.mip_levels < 0 || o.mip_levels > 8)
+    throw Error(ErrorCode::InvalidArgument,
+                "atlas: " + std::to_string(o.mip_levels) + " seam-free mip levels asked; 0 to 8 are possible");
+  const int block = 1 << o.mip_levels;
+  if (o.texture_width % block || o.texture_height % block)
+    throw Error(ErrorCode::InvalidArgument, "atlas: a " + size_text(o.texture_width, o.texture_height) +
+                                                " texture cannot keep " + std::to_string(o.mip_levels) +
+                                                " mip levels seam-free: its sides must be multiples of " +
+                                                std::to_string(block));
+  const int k = o.texels_per_quad;
+  if (o.mip_levels > 0 && k > 0 && (k < block || (k & (k - 1))))
+    throw Error(ErrorCode::InvalidArgument,
+                "atlas: " + std::to_string(k) + " texels per quad cannot keep " + std::to_string(o.mip_levels) +
+                    " mip levels seam-free: it must be a power of two of at least " + std::to_string(block));
   if (quads.num_quads() == 0) throw Error(ErrorCode::InvalidArgument, "atlas: the quad mesh has no quads");
+}
+
+// The gutter used: for mip levels, the one asked raised to a multiple of 2^(L+1) (at least one texel per chart side
+// at level L).
+int gutter_used(const AtlasOptions& o) {
+  if (o.mip_levels == 0) return o.gutter;
+  const int step = 2 << o.mip_levels;
+  return std::max(step, (o.gutter + step - 1) / step * step);
+}
+
+// The texels per quad side tried at step s = 1, 2, ...: every whole number, or for mip levels the powers of two
+// from 2^L on.
+int texels_at_step(int step, int mip_levels) { return mip_levels == 0 ? step : (1 << mip_levels) << (step - 1); }
+
+// The largest K for which the charts pack (a binary search over the steps; smaller squares pack at least as well),
+// or the smallest K when none does.
+int largest_packing_texels(const AtlasOptions& o, int largest, const std::function<bool(int)>& fits) {
+  int hi = o.mip_levels == 0 ? largest : 1;
+  while (o.mip_levels > 0 && texels_at_step(hi + 1, o.mip_levels) <= largest && hi < 16) ++hi;
+  int lo = 0;
+  while (lo < hi) {
+    const int mid = (lo + hi + 1) / 2;
+    if (fits(texels_at_step(mid, o.mip_levels)))
+      lo = mid;
+    else
+      hi = mid - 1;
+  }
+  return texels_at_step(std::max(lo, 1), o.mip_levels);
 }
 
 }  // namespace
@@ -325,25 +369,12 @@ QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
     Point lo;
     turned_bounds(charts, chart_quads[c], 0, &lo, &chart_size[c]);
   }
-  const int W = options.texture_width, H = options.texture_height;
+  const int W = options.texture_width, H = options.texture_height, gutter = gutter_used(options);
   const int largest = std::max(1, static_cast<int>(std::sqrt(double(W) * H / quads.num_quads())));
-  auto fits = [&](int k, std::vector<Placement>* placements) {
-    return pack_charts(chart_size, W, H, k, options.gutter, placements);
-  };
   std::vector<Placement> placements;
-  int k = options.texels_per_quad;
-  if (k == 0) {  // the largest K that packs: a binary search (smaller squares pack at least as well)
-    int lo = 0, hi = largest;
-    while (lo < hi) {
-      const int mid = (lo + hi + 1) / 2;
-      if (fits(mid, &placements))
-        lo = mid;
-      else
-        hi = mid - 1;
-    }
-    k = std::max(lo, 1);
-  }
-  if (!fits(k, &placements))
+  auto fits = [&](int k) { return pack_charts(chart_size, W, H, k, gutter, &placements); };
+  const int k = options.texels_per_quad > 0 ? options.texels_per_quad : largest_packing_texels(options, largest, fits);
+  if (!fits(k))
     throw Error(ErrorCode::InvalidArgument,
                 "atlas: " + std::to_string(charts.count) + " charts of " + std::to_string(quads.num_quads()) +
                     " quads do not fit a " + size_text(W, H) + " texture at " + std::to_string(k) +
@@ -354,6 +385,8 @@ QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
   atlas.texels_per_quad = k;
   atlas.texture_width = W;
   atlas.texture_height = H;
+  atlas.gutter = gutter;
+  atlas.mip_levels = options.mip_levels;
   write_corner_uv(charts, chart_quads, placements, k, atlas);
   atlas.seam_edges = count_seam_edges(across, charts.quad_chart);
   atlas.texture_use = double(quads.num_quads()) * k * k / (double(W) * H);
@@ -361,9 +394,14 @@ QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
 }
 
 void to_json(Json& j, const QuadAtlas& a) {
-  j = Json{{"charts", a.num_charts},           {"texels_per_quad", a.texels_per_quad},
-           {"texture_width", a.texture_width}, {"texture_height", a.texture_height},
-           {"seam_edges", a.seam_edges},       {"texture_use", a.texture_use}};
+  j = Json{{"charts", a.num_charts},
+           {"texels_per_quad", a.texels_per_quad},
+           {"texture_width", a.texture_width},
+           {"texture_height", a.texture_height},
+           {"seam_edges", a.seam_edges},
+           {"texture_use", a.texture_use},
+           {"gutter", a.gutter},
+           {"mip_levels", a.mip_levels}};
 }
 
 }  // namespace qgp

@@ -8,7 +8,14 @@
 // around), and never across a separatrix of the quad mesh's irregular vertices (traced as a
 // motorcycle graph), so charts are the layout's grid rectangles. A chart is injective and its cells
 // are whole quads. Charts are packed bottom-left into the texture at whole-texel offsets, turned by
-// 0 or 90 degrees, longest first, with `gutter` empty texels between charts.
+// 0 or 90 degrees, longest first, with `gutter` empty texels between charts and half of it at the
+// texture's sides: each chart has gutter / 2 texels of its own around it, which seam stitching
+// (atlas/stitch_seams.h) fills from the chart across each seam.
+//
+// With mip_levels = L > 0, K is a power of two of at least 2^L, the gutter a multiple of 2^(L+1)
+// and every chart starts at a multiple of 2^L texels: at mip levels 1 .. L (each texel the mean of
+// 2 x 2 texels of the level below) quads are still whole texels, seams still map texels onto texels,
+// and every chart keeps at least one texel of its own gutter.
 #pragma once
 #include <vector>
 
@@ -20,7 +27,8 @@ namespace qgp {
 struct AtlasOptions {
   int texture_width = 1024, texture_height = 1024;
   int texels_per_quad = 0;  // K; 0: the largest K for which every chart fits
-  int gutter = 2;           // empty texels between charts
+  int gutter = 2;           // empty texels between charts (raised for mip_levels)
+  int mip_levels = 0;       // L: the mip levels 1 .. L stay seam-free (K a power of two >= 2^L)
 };
 
 struct QuadAtlas {
@@ -31,13 +39,15 @@ struct QuadAtlas {
   int num_charts = 0;
   int texels_per_quad = 0;
   int texture_width = 0, texture_height = 0;
-  int seam_edges = 0;        // quad edges whose two quads lie in different charts
-  double texture_use = 0.0;  // texels covered by quads / all texels
+  int gutter = 0, mip_levels = 0;  // as used
+  int seam_edges = 0;              // quad edges whose two quads lie in different charts
+  double texture_use = 0.0;        // texels covered by quads / all texels
 };
 
 // quads: a quad mesh, counter-clockwise (edges with more than two quads are treated as seams).
-// Throws Error(InvalidArgument) when the texture size or K is not positive, or when the charts do
-// not fit the texture at the K asked (or at K = 1), naming the sizes.
+// Throws Error(InvalidArgument) when the texture size or K is not positive (for mip levels: when K
+// is not a power of two of at least 2^L or the texture's sides not multiples of 2^L), or when the
+// charts do not fit the texture at the K asked (or at the smallest K), naming the sizes.
 QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options);
 
 // The "atlas" object of the JSON report.

@@ -11,6 +11,10 @@ struct PolygonSoup {
   std::vector<Vec3> positions;     // #V positions
   std::vector<int> face_start{0};  // #faces+1 offsets into face_vertices
   std::vector<int> face_vertices;  // vertex indices of all faces, concatenated
+  // Texture coordinates (OBJ vt records) and, per entry of face_vertices, the one its corner uses
+  // (-1: none); both empty when the file has none.
+  std::vector<std::array<double, 2>> texcoords;
+  std::vector<int> corner_texcoord;
 
   int num_vertices() const { return static_cast<int>(positions.size()); }
   int num_faces() const { return static_cast<int>(face_start.size()) - 1; }

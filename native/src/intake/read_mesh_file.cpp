@@ -98,7 +98,33 @@ bool parse_long(std::string_view token, long long& value) {
 
 std::string at_line(size_t n) { return "line " + std::to_string(n) + ": "; }
 
-// ---- OBJ: v / f records; texture and normal references, groups, materials are ignored ----
+// The texture coordinate index of an OBJ face corner "v/vt[/vn]" (-1 without one), resolved as for vertices.
+int corner_texcoord(const std::string& path, size_t line, std::string_view token, size_t num_texcoords) {
+  const size_t slash = token.find('/');
+  if (slash == std::string_view::npos) return -1;
+  std::string_view text = token.substr(slash + 1);
+  text = text.substr(0, text.find('/'));
+  if (text.empty()) return -1;
+  long long index = 0;
+  if (!parse_long(text, index) || index == 0)
+    unreadable(path, at_line(line) + "bad texture coordinate reference '" + std::string(token) + "'");
+  const long long resolved = index > 0 ? index - 1 : static_cast<long long>(num_texcoords) + index;
+  if (resolved < 0 || resolved >= static_cast<long long>(num_texcoords))
+    unreadable(path, at_line(line) + "texture coordinate reference " + std::to_string(index) + " out of range");
+  return static_cast<int>(resolved);
+}
+
+std::array<double, 2> read_texcoord(const std::string& path, size_t line, std::string_view rest) {
+  std::array<double, 2> uv;
+  for (int k = 0; k < 2; ++k) {
+    std::string_view t;
+    if (!next_token(rest, t) || !parse_double(t, uv[k]) || !std::isfinite(uv[k]))
+      unreadable(path, at_line(line) + "a texture coordinate needs two finite numbers");
+  }
+  return uv;
+}
+
+// ---- OBJ: v / vt / f records; normal references, groups, materials are ignored ----
 PolygonSoup read_obj(const std::string& path, const std::string& text) {
   PolygonSoup soup;
   LineReader lines(text);
@@ -124,9 +150,12 @@ PolygonSoup read_obj(const std::string& path, const std::string& text) {
           unreadable(path, at_line(lines.line_number()) + "a vertex needs three numbers");
       }
       soup.positions.push_back(p);
+    } else if (token == "vt") {
+      soup.texcoords.push_back(read_texcoord(path, lines.line_number(), rest));
     } else if (token == "f") {
       face.clear();
       while (next_token(rest, token)) {
+        soup.corner_texcoord.push_back(corner_texcoord(path, lines.line_number(), token, soup.texcoords.size()));
         const std::string_view index_text = token.substr(0, token.find('/'));
         long long index = 0;
         if (!parse_long(index_text, index) || index == 0)
@@ -141,6 +170,10 @@ PolygonSoup read_obj(const std::string& path, const std::string& text) {
       if (face.size() < 3) unreadable(path, at_line(lines.line_number()) + "a face needs at least three vertices");
       soup.add_face(face.data(), static_cast<int>(face.size()));
     }
+  }
+  if (std::all_of(soup.corner_texcoord.begin(), soup.corner_texcoord.end(), [](int t) { return t < 0; })) {
+    soup.texcoords.clear();
+    soup.corner_texcoord.clear();
   }
   return soup;
 }
