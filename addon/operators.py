@@ -12,7 +12,7 @@ import time
 
 import bpy
 
-from . import blender_mesh
+from . import atlas, blender_mesh
 from .core import binding, worker
 from .prefs import preferences
 
@@ -223,6 +223,13 @@ DESCRIPTIONS = {
                 "is not used",
     "show_layout": "Also make an object '<name>_layout' with the quad layout's lines (the patches the quads "
                    "are laid out in), drawn in front",
+    "texture_atlas": "Give the quads a texture atlas (UV map 'QGP Atlas'): every quad a square of whole texels, "
+                     "charts packed into [0,1] without overlap, every seam a quarter turn plus whole texels, so "
+                     "Stitch Seams can hide the seams of a baked or painted image",
+    "atlas_size": "Width and height in texels of the texture the atlas is made for",
+    "atlas_mip_levels": "Keep this many mip levels seam-free too (texels per quad a power of two, charts on "
+                        "multiples of 2^levels texels, a wider gutter): the atlas uses less of the texture",
+    "stitch_image": "The image to stitch (empty: the active Image Texture node of the active material)",
     "quads_per_unit": "Grid cells per UV unit: a texture of this period tiles without visible seams",
     "mark_seams": "Mark the map's cuts (the UV islands' boundaries) as seams, on the mesh or on its "
                   "Flip-Free Copy",
@@ -281,6 +288,12 @@ def draw_quad_output(layout, data):
     col.prop(data, "keep_attributes")
     col.prop(data, "keep_source_uvs")
     col.prop(data, "show_layout")
+    col = layout.column(align=True)
+    col.prop(data, "texture_atlas")
+    sub = col.column(align=True)
+    sub.active = data.texture_atlas
+    sub.prop(data, "atlas_size")
+    sub.prop(data, "atlas_mip_levels")
 
 
 def draw_uv_output(layout, data):
@@ -426,6 +439,12 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
     show_layout: bpy.props.BoolProperty(name="Show Layout", default=False, description=DESCRIPTIONS["show_layout"])
     symmetry: bpy.props.BoolVectorProperty(name="Symmetry", size=3, subtype="XYZ", default=(False, False, False),
                                            description=DESCRIPTIONS["symmetry"])
+    texture_atlas: bpy.props.BoolProperty(name="Texture Atlas", default=False,
+                                          description=DESCRIPTIONS["texture_atlas"])
+    atlas_size: bpy.props.IntProperty(name="Texture Size", default=1024, min=16, max=16384,
+                                      description=DESCRIPTIONS["atlas_size"])
+    atlas_mip_levels: bpy.props.IntProperty(name="Seam-Free Mip Levels", default=0, min=0, max=6,
+                                            description=DESCRIPTIONS["atlas_mip_levels"])
 
     def _kept_of_source(self):
         return self.keep_attributes, self.keep_source_uvs
@@ -447,7 +466,9 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
         if obj["qgp"]["symmetry"]:
             message += f", mirror-symmetric in {obj['qgp']['symmetry'].upper()}"
-        warn = bool(obj["qgp"]["count_note"])
+        atlas_note, atlas_failed = self._write_atlas(obj, vertices, quads)
+        message += atlas_note
+        warn = bool(obj["qgp"]["count_note"]) or atlas_failed
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
             message += f"; {obj['qgp']['count_note']}"
         rescued = report.get("rescued_components", [])
@@ -467,6 +488,18 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
             warn = True
         self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
+
+    def _write_atlas(self, obj, vertices, quads):
+        """With Texture Atlas: the atlas UV layer; (message part, whether it failed)."""
+        if not self.texture_atlas:
+            return "", False
+        try:
+            info = atlas.write_atlas_uvs(obj.data, vertices, quads, self.atlas_size, self.atlas_mip_levels)
+        except binding.QGPError as e:
+            return f"; no texture atlas: {e.message}", True
+        obj["qgp"]["atlas"] = info
+        return (f"; atlas: {info['charts']} charts, {info['texels_per_quad']} texels per quad, "
+                f"{100 * info['texture_use']:.0f} % of the {self.atlas_size} x {self.atlas_size} texture"), False
 
     def _make_layout_object(self, context):
         """The layout's lines as '<name>_layout'; a layout the library cannot give is a warning."""
@@ -563,7 +596,46 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
         box.prop(self, "flip_free_copy")
 
 
-classes = (OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_grid_uv)
+class OBJECT_OT_qgp_stitch_seams(bpy.types.Operator):
+    """Fill the gutters of an image in the active object's texture atlas from across each seam, so the seams
+    of a baked or painted texture do not show (bilinear filtering reads the same colour on both sides)"""
+
+    bl_idname = "object.qgp_stitch_seams"
+    bl_label = "Stitch Seams"
+    bl_options = {"REGISTER", "UNDO"}
+
+    image_name: bpy.props.StringProperty(name="Image", default="", description=DESCRIPTIONS["stitch_image"])
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        return obj is not None and obj.type == "MESH" and len(obj.data.uv_layers) > 0
+
+    def execute(self, context):
+        obj = context.active_object
+        image = bpy.data.images.get(self.image_name) if self.image_name else atlas.material_image(obj)
+        if image is None or image.size[0] == 0:
+            self.report({"ERROR"}, f"No image to stitch: '{self.image_name}' does not exist" if self.image_name else
+                        "No image to stitch: give its name, or make it the active Image Texture node of the "
+                        "active material")
+            return {"CANCELLED"}
+        layer = obj.data.uv_layers.get(atlas.ATLAS_LAYER) or obj.data.uv_layers.active
+        try:
+            info = atlas.stitch_image(obj.data, layer, image)
+        except binding.QGPError as e:
+            self.report({"ERROR"}, f"Stitch Seams: {e.message}")
+            return {"CANCELLED"}
+        message = (f"{image.name}: {info['seam_edges']} seam edges of '{layer.name}' stitched "
+                   f"({info['seam_texels']} texels)")
+        if info["unmatched_seam_edges"]:
+            self.report({"WARNING"}, f"{message}; {info['unmatched_seam_edges']} seam edges do not map texels onto "
+                                     f"texels (not a grid-aligned atlas there) and were left as borders")
+        else:
+            self.report({"INFO"}, message)
+        return {"FINISHED"}
+
+
+classes = (OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_stitch_seams)
 
 
 def register():

@@ -1,7 +1,8 @@
 """Sidebar panel (View3D > Sidebar > Retopo: Density, Features, Output) and Object menu entries."""
 import bpy
 
-from .operators import (DESCRIPTIONS, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_quad_remesh, TargetSettings,
+from .operators import (DESCRIPTIONS, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_stitch_seams,
+                        TargetSettings,
                         draw_density, draw_features, draw_quad_output, draw_uv_output, flag)
 
 
@@ -17,11 +18,17 @@ class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description=DESCRIPTIONS["quads_per_unit"])
     mark_seams: flag("mark_seams", "Mark Seams", False)
+    texture_atlas: flag("texture_atlas", "Texture Atlas", False)
+    atlas_size: bpy.props.IntProperty(name="Texture Size", default=1024, min=16, max=16384,
+                                      description=DESCRIPTIONS["atlas_size"])
+    atlas_mip_levels: bpy.props.IntProperty(name="Seam-Free Mip Levels", default=0, min=0, max=6,
+                                            description=DESCRIPTIONS["atlas_mip_levels"])
 
 
 # The settings both operators take, and those of each one's output.
 _SHARED = tuple(TargetSettings.__annotations__)
-_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout", "symmetry")
+_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout", "symmetry", "texture_atlas",
+                "atlas_size", "atlas_mip_levels")
 _UV_OUTPUT = ("quads_per_unit", "mark_seams")
 
 
@@ -81,6 +88,9 @@ class VIEW3D_PT_qgp_output(_RetopoSidebar, bpy.types.Panel):
         draw_uv_output(box.column(), settings)
         op = box.operator(OBJECT_OT_qgp_grid_uv.bl_idname, icon="UV")
         _pass(op, settings, _SHARED + _UV_OUTPUT)
+        box = self.layout.box()
+        box.label(text="Baked or painted image in the atlas")
+        box.operator(OBJECT_OT_qgp_stitch_seams.bl_idname, icon="IMAGE_DATA")
 
 
 PANELS = (VIEW3D_PT_qgp_retopo, VIEW3D_PT_qgp_density, VIEW3D_PT_qgp_features, VIEW3D_PT_qgp_output)

@@ -108,6 +108,10 @@ def _declare(lib):
     })
     sigs["qgp_measure_polygon_mesh"] = (c_int, [p_double, c_int64, p_int32, c_int64, p_int32, p_double, c_int64,
                                                 p_int32, c_int64, c_double, ctypes.c_char_p, c_int64, p_int64])
+    sigs["qgp_atlas_quads"] = (c_int, [p_double, c_int64, p_int32, c_int64, c_int, c_int, c_int, c_int, c_int,
+                                       p_double, p_int32])
+    sigs["qgp_stitch_seams"] = (c_int, [p_int32, c_int64, p_int32, p_double, ctypes.POINTER(ctypes.c_float), c_int,
+                                        c_int, c_int, p_int64])
     optional = {
         "qgp_result_quad_counts": (c_int, [vp, p_int64, p_int64]),
         "qgp_result_quad_fetch": (c_int, [vp, p_double, p_int32, p_int32]),
@@ -177,6 +181,42 @@ def measure_polygon_mesh(vertices, face_sizes, corners, ref_vertices, ref_triang
     if status != OK:
         raise QGPError(status, lib.qgp_last_error().decode())
     return json.loads(buffer.value.decode())
+
+
+def atlas_quads(vertices, quads, size, texels_per_quad=0, gutter=2, mip_levels=0):
+    """A texture atlas for quads (n,4) on a size x size texture: (corner UVs (n,4,2) in [0,1], dict of
+    charts, texels_per_quad, seam_edges, gutter, texture_use)."""
+    lib = load_library()
+    v = np.ascontiguousarray(vertices, np.float64).reshape(-1, 3)
+    q = np.ascontiguousarray(quads, np.int32).reshape(-1, 4)
+    uv = np.empty((len(q), 4, 2), np.float64)
+    info = np.zeros(5, np.int32)
+    status = lib.qgp_atlas_quads(_ptr(v, ctypes.c_double), len(v), _ptr(q, ctypes.c_int32), len(q), int(size),
+                                 int(size), int(texels_per_quad), int(gutter), int(mip_levels),
+                                 _ptr(uv, ctypes.c_double), _ptr(info, ctypes.c_int32))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    keys = ("charts", "texels_per_quad", "seam_edges", "gutter")
+    return uv, {**dict(zip(keys, map(int, info[:4]))), "texture_use": info[4] / 1e6}
+
+
+def stitch_seams(face_sizes, corners, corner_uv, pixels, width, height, channels):
+    """Seam stitching of pixels (float32, width x height x channels, row 0 at v = 0) in place for the
+    faces' per-corner UVs (corners (c,) vertex indices, corner_uv (c,2)): dict of seam_edges,
+    unmatched_seam_edges, seam_texels, charts."""
+    lib = load_library()
+    sizes = np.ascontiguousarray(face_sizes, np.int32)
+    c = np.ascontiguousarray(corners, np.int32)
+    uv = np.ascontiguousarray(corner_uv, np.float64).reshape(-1, 2)
+    if pixels.dtype != np.float32 or not pixels.flags.c_contiguous or pixels.size != width * height * channels:
+        raise ValueError("pixels must be a contiguous float32 array of width x height x channels")
+    info = np.zeros(4, np.int64)
+    status = lib.qgp_stitch_seams(_ptr(sizes, ctypes.c_int32), len(sizes), _ptr(c, ctypes.c_int32),
+                                  _ptr(uv, ctypes.c_double), _ptr(pixels, ctypes.c_float), int(width), int(height),
+                                  int(channels), _ptr(info, ctypes.c_int64))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    return dict(zip(("seam_edges", "unmatched_seam_edges", "seam_texels", "charts"), map(int, info)))
 
 
 def _ptr(array, ctype):

@@ -177,6 +177,27 @@ QGP_API int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertice
                                      int64_t num_ref_vertices, const int32_t* ref_triangles, int64_t num_ref_triangles,
                                      double sharp_angle_deg, char* json, int64_t json_size, int64_t* needed);
 
+/* A texture atlas for a quad mesh (docs: every quad a K x K square of whole texels, charts packed into
+ * a texture_width x texture_height texture with `gutter` texels between them, every seam a quarter
+ * turn plus whole texels): vertices nv x 3, quads nq x 4 (counter-clockwise); texels_per_quad 0
+ * chooses the largest that fits; mip_levels L keeps levels 1..L seam-free. corner_uv (8 nq doubles)
+ * gets (u, v) in [0,1] per quad corner; info (may be null, 5 ints) gets charts, texels per quad,
+ * seam edges, the gutter used and the texture use in millionths. QGP_ERR_INVALID_ARGUMENT (with the
+ * sizes named) when the charts do not fit. */
+QGP_API int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const int32_t* quads, int64_t num_quads,
+                            int texture_width, int texture_height, int texels_per_quad, int gutter, int mip_levels,
+                            double* corner_uv, int32_t* info);
+
+/* Seam stitching of an image in a grid-aligned atlas (e.g. the one above): fills the empty texels
+ * beside each seam from across it, so bilinear samples agree on both sides. Faces: face_sizes nf,
+ * corners sum(face_sizes) vertex indices (edges are matched by them); corner_uv: (u, v) per corner.
+ * pixels: width x height x channels floats, row 0 at v = 0 (Blender's order), changed in place
+ * (only texels no face covers). info (may be null, 4 values): seam edges stitched, seam edges that
+ * do not map texels onto texels (left as borders), texels stitched, charts. */
+QGP_API int qgp_stitch_seams(const int32_t* face_sizes, int64_t num_faces, const int32_t* corners,
+                             const double* corner_uv, float* pixels, int width, int height, int channels,
+                             int64_t* info);
+
 /* Reading a mesh file as it is (polygons, no repair), e.g. to import it into Blender. */
 typedef struct qgp_soup qgp_soup;
 QGP_API int qgp_soup_read(const char* path, qgp_soup** out_soup);

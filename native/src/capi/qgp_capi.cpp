@@ -14,6 +14,8 @@
 #include <string>
 #include <thread>
 
+#include "atlas/quad_atlas.h"
+#include "atlas/stitch_seams.h"
 #include "core/error.h"
 #include "intake/read_mesh_file.h"
 #include "metrics/polygon_metrics.h"
@@ -535,6 +537,78 @@ int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* tr
   });
 }
 
+namespace {
+
+// Polygons from flat arrays (vertices may be null: positions then stay zero), checked as they are read.
+qgp::PolygonSoup polygon_arrays(const double* vertices, int64_t num_vertices, const int32_t* face_sizes,
+                                int64_t num_faces, const int32_t* corners) {
+  qgp::PolygonSoup mesh;
+  mesh.positions.resize(static_cast<size_t>(num_vertices), qgp::Vec3::Zero());
+  for (int64_t v = 0; vertices && v < num_vertices; ++v)
+    mesh.positions[v] = qgp::Vec3(vertices[3 * v], vertices[3 * v + 1], vertices[3 * v + 2]);
+  int64_t offset = 0;
+  for (int64_t f = 0; f < num_faces; ++f) {
+    require(face_sizes[f] >= 3, "face " + std::to_string(f) + " has fewer than three corners");
+    for (int32_t k = 0; k < face_sizes[f]; ++k)
+      require(corners[offset + k] >= 0 && corners[offset + k] < num_vertices,
+              "face " + std::to_string(f) + " refers to a vertex out of range");
+    mesh.add_face(corners + offset, face_sizes[f]);
+    offset += face_sizes[f];
+  }
+  return mesh;
+}
+
+}  // namespace
+
+int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const int32_t* quads, int64_t num_quads,
+                    int texture_width, int texture_height, int texels_per_quad, int gutter, int mip_levels,
+                    double* corner_uv, int32_t* info) {
+  return guarded(nullptr, [&] {
+    require(num_vertices >= 0 && num_quads >= 0 && num_quads < INT32_MAX / 4, "counts out of range");
+    require((num_vertices == 0 || vertices) && (num_quads == 0 || quads) && corner_uv, "an array is null");
+    qgp::QuadMesh mesh;
+    mesh.V = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(vertices, num_vertices, 3);
+    mesh.Q = Eigen::Map<const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>>(quads, num_quads, 4);
+    for (int64_t c = 0; c < 4 * num_quads; ++c)
+      require(quads[c] >= 0 && quads[c] < num_vertices,
+              "quad " + std::to_string(c / 4) + " refers to a vertex out of range");
+    const qgp::QuadAtlas atlas = qgp::build_quad_atlas(
+        mesh, qgp::AtlasOptions{texture_width, texture_height, texels_per_quad, gutter, mip_levels});
+    std::copy_n(atlas.corner_uv.data(), atlas.corner_uv.size(), corner_uv);
+    if (info) {
+      const int32_t values[5] = {atlas.num_charts, atlas.texels_per_quad, atlas.seam_edges, atlas.gutter,
+                                 static_cast<int32_t>(1e6 * atlas.texture_use)};
+      std::copy_n(values, 5, info);
+    }
+    return QGP_OK;
+  });
+}
+
+int qgp_stitch_seams(const int32_t* face_sizes, int64_t num_faces, const int32_t* corners, const double* corner_uv,
+                     float* pixels, int width, int height, int channels, int64_t* info) {
+  return guarded(nullptr, [&] {
+    require(num_faces >= 0 && width > 0 && height > 0 && channels > 0 && channels <= 4, "sizes out of range");
+    require((num_faces == 0 || (face_sizes && corners && corner_uv)) && pixels, "an array is null");
+    int64_t num_corners = 0;
+    for (int64_t f = 0; f < num_faces; ++f) num_corners += std::max(face_sizes[f], 0);
+    require(num_corners < INT32_MAX, "too many face corners");
+    const int64_t num_vertices = num_corners > 0 ? int64_t{*std::max_element(corners, corners + num_corners)} + 1 : 0;
+    const qgp::PolygonSoup faces = polygon_arrays(nullptr, num_vertices, face_sizes, num_faces, corners);
+    std::vector<std::array<double, 2>> uv(num_corners);
+    for (int64_t c = 0; c < num_corners; ++c) uv[c] = {corner_uv[2 * c], corner_uv[2 * c + 1]};
+    qgp::AtlasImage image{width, height, channels, {}};
+    const size_t size = static_cast<size_t>(width) * height * channels;
+    image.texels.assign(pixels, pixels + size);
+    const qgp::StitchReport report = qgp::stitch_seams(faces, uv, image);
+    std::copy_n(image.texels.data(), size, pixels);
+    if (info) {
+      const int64_t values[4] = {report.seam_edges, report.unmatched_seam_edges, report.seam_texels, report.charts};
+      std::copy_n(values, 4, info);
+    }
+    return QGP_OK;
+  });
+}
+
 int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const int32_t* face_sizes, int64_t num_faces,
                              const int32_t* corners, const double* ref_vertices, int64_t num_ref_vertices,
                              const int32_t* ref_triangles, int64_t num_ref_triangles, double sharp_angle_deg,
@@ -545,19 +619,7 @@ int qgp_measure_polygon_mesh(const double* vertices, int64_t num_vertices, const
     require((num_vertices == 0 || vertices) && (num_faces == 0 || (face_sizes && corners)) &&
                 (num_ref_vertices == 0 || ref_vertices) && (num_ref_triangles == 0 || ref_triangles),
             "an array is null");
-    qgp::PolygonSoup mesh;
-    mesh.positions.resize(static_cast<size_t>(num_vertices));
-    for (int64_t v = 0; v < num_vertices; ++v)
-      mesh.positions[v] = qgp::Vec3(vertices[3 * v], vertices[3 * v + 1], vertices[3 * v + 2]);
-    int64_t offset = 0;
-    for (int64_t f = 0; f < num_faces; ++f) {
-      require(face_sizes[f] >= 3, "face " + std::to_string(f) + " has fewer than three corners");
-      for (int32_t k = 0; k < face_sizes[f]; ++k)
-        require(corners[offset + k] >= 0 && corners[offset + k] < num_vertices,
-                "face " + std::to_string(f) + " refers to a vertex out of range");
-      mesh.add_face(corners + offset, face_sizes[f]);
-      offset += face_sizes[f];
-    }
+    const qgp::PolygonSoup mesh = polygon_arrays(vertices, num_vertices, face_sizes, num_faces, corners);
     qgp::Progress progress;
     const qgp::IntakeResult reference = qgp::run_intake(
         qgp::soup_from_triangle_arrays(ref_vertices, num_ref_vertices, ref_triangles, num_ref_triangles),

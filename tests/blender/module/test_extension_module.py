@@ -112,6 +112,37 @@ def test_operators(binding):
         print(f"{source.name}: grid UVs on {loops} loops, {seams} seams, transition residual {residual:.2e}")
 
 
+def test_atlas_and_stitch(binding):
+    """Texture Atlas and Stitch Seams through this Blender's UV map and image pixel APIs: the bunny's
+    quads with the UV map 'QGP Atlas' (UVs in [0,1]); an image of random colours stitched: texels inside
+    quads unchanged, gutter texels beside seams filled."""
+    import numpy as np
+    reset_scene()
+    bunny = addon_checks.import_mesh(binding, os.path.join(MESHES, "bunny.off"))
+    quad = run_quad_remesh(bunny, target_faces=TARGET, texture_atlas=True, atlas_size=256, keep_source_visible=True)
+    layer = quad.data.uv_layers.active
+    uv = np.empty(2 * len(quad.data.loops), np.float32)
+    layer.data.foreach_get("uv", uv)
+    assert layer.name == "QGP Atlas" and uv.min() >= 0 and uv.max() <= 1, (layer.name, uv.min(), uv.max())
+    covered = np.zeros((256, 256), bool)
+    for square in np.round(uv.reshape(-1, 4, 2) * 256).astype(int):
+        lo, hi = square.min(0), square.max(0)
+        covered[lo[1]:hi[1], lo[0]:hi[0]] = True
+    image = bpy.data.images.new("qgp_random", 256, 256)
+    before = np.random.default_rng(1).random(256 * 256 * 4).astype(np.float32)
+    image.pixels.foreach_set(before)
+    image.pixels.foreach_get(before)  # as the image stores them
+    addon_checks.select_only(quad)
+    assert bpy.ops.object.qgp_stitch_seams(image_name=image.name) == {"FINISHED"}
+    after = np.empty_like(before)
+    image.pixels.foreach_get(after)
+    before, after = before.reshape(256, 256, 4), after.reshape(256, 256, 4)
+    changed = (before != after).any(axis=2)
+    assert not changed[covered].any() and changed[~covered].mean() > 0.5, changed[~covered].mean()
+    print(f"atlas: {quad['qgp']['atlas']['charts']} charts, {quad['qgp']['atlas']['texels_per_quad']} texels per "
+          f"quad; Stitch Seams filled {changed.sum()} of {(~covered).sum()} empty texels")
+
+
 def test_guides_and_attributes():
     """The APIs that differ from Blender 3.4: seams (the '.uv_seam' attribute), face sets
     ('.sculpt_face_set') and material boundaries as guides; vertex groups, colour and face
@@ -180,6 +211,7 @@ def main():
         binding = sys.modules[PACKAGE + ".core.binding"]
         test_registration(binding)
         test_operators(binding)
+        test_atlas_and_stitch(binding)
         test_guides_and_attributes()
         test_symmetry()
         test_painted_density()
