@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -169,6 +171,122 @@ void grow_chart(const QuadMesh& quads, const std::vector<int>& across, const std
   }
 }
 
+Point rotate(const Point& p, int turns) {  // by turns * 90 degrees, counter-clockwise
+  Point r = p;
+  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
+  return r;
+}
+
+// A chart's cells and the one place of each vertex, for trying a union with another chart.
+struct ChartShape {
+  std::unordered_set<uint64_t> cells;
+  std::unordered_map<uint64_t, int> vertex_at;
+  std::unordered_map<int, Point> place_of;
+  Point lo{INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN};
+  void add(const QuadMesh& quads, int q, const std::array<Point, 4>& c) {
+    cells.insert(point_key(cell_of(c)));
+    for (int k = 0; k < 4; ++k) {
+      vertex_at[point_key(c[k])] = quads.Q(q, k);
+      place_of[quads.Q(q, k)] = c[k];
+      for (int d = 0; d < 2; ++d) lo[d] = std::min(lo[d], c[k][d]), hi[d] = std::max(hi[d], c[k][d]);
+    }
+  }
+};
+
+// Where chart b's corners go in chart a's frame when they are glued along side `side` (of a quad of a) and
+// the side across it (of a quad of b): p -> rotate(p, turns) + shift.
+struct Glue {
+  int turns = 0;
+  Point shift{0, 0};
+  Point apply(const Point& p) const {
+    const Point r = rotate(p, turns);
+    return {r[0] + shift[0], r[1] + shift[1]};
+  }
+};
+
+Glue glue_across(const Charts& charts, int side, int twin) {
+  const Point a0 = charts.corner[side], a1 = charts.corner[4 * (side / 4) + (side % 4 + 1) % 4];
+  const Point b0 = charts.corner[twin], b1 = charts.corner[4 * (twin / 4) + (twin % 4 + 1) % 4];
+  Glue glue;
+  while (glue.turns < 4 && rotate({b1[0] - b0[0], b1[1] - b0[1]}, glue.turns) != Point{a0[0] - a1[0], a0[1] - a1[1]})
+    ++glue.turns;
+  const Point r = rotate(b0, glue.turns);
+  glue.shift = {a1[0] - r[0], a1[1] - r[1]};
+  return glue;
+}
+
+// True (and b's corners moved into a's frame, its quads given to a) when a and b glued along the given
+// sides are still injective (no cell twice, each vertex at one place, each place one vertex) and their
+// union is a rectangle of cells (so it packs as well as its parts).
+bool merge_if_rectangle(const QuadMesh& quads, const std::vector<int>& quads_a, const std::vector<int>& quads_b,
+                        const Glue& glue, Charts& charts) {
+  ChartShape shape;
+  for (int q : quads_a)
+    shape.add(quads, q,
+              {charts.corner[4 * q], charts.corner[4 * q + 1], charts.corner[4 * q + 2], charts.corner[4 * q + 3]});
+  for (int q : quads_b) {
+    std::array<Point, 4> c;
+    for (int k = 0; k < 4; ++k) c[k] = glue.apply(charts.corner[4 * q + k]);
+    if (shape.cells.count(point_key(cell_of(c)))) return false;
+    for (int k = 0; k < 4; ++k) {
+      const auto v = shape.vertex_at.find(point_key(c[k]));
+      if (v != shape.vertex_at.end() && v->second != quads.Q(q, k)) return false;
+      const auto p = shape.place_of.find(quads.Q(q, k));
+      if (p != shape.place_of.end() && p->second != c[k]) return false;
+    }
+    shape.add(quads, q, c);
+  }
+  const long long area = static_cast<long long>(shape.hi[0] - shape.lo[0]) * (shape.hi[1] - shape.lo[1]);
+  if (area != static_cast<long long>(shape.cells.size())) return false;
+  const int a = charts.quad_chart[quads_a.front()];
+  for (int q : quads_b) {
+    charts.quad_chart[q] = a;
+    for (int k = 0; k < 4; ++k) charts.corner[4 * q + k] = glue.apply(charts.corner[4 * q + k]);
+  }
+  return true;
+}
+
+// Renumbers charts 0.. in the order of their first quad; returns the quads of each.
+std::vector<std::vector<int>> renumber_charts(Charts& charts) {
+  std::unordered_map<int, int> id;
+  std::vector<std::vector<int>> chart_quads;
+  for (size_t q = 0; q < charts.quad_chart.size(); ++q) {
+    const auto [it, added] = id.emplace(charts.quad_chart[q], static_cast<int>(id.size()));
+    if (added) chart_quads.emplace_back();
+    charts.quad_chart[q] = it->second;
+    chart_quads[it->second].push_back(static_cast<int>(q));
+  }
+  charts.count = static_cast<int>(chart_quads.size());
+  return chart_quads;
+}
+
+// One round of merging neighbouring charts into rectangles, pairs sharing the most sides first, each chart
+// at most once; returns whether any merged.
+bool merge_round(const QuadMesh& quads, const std::vector<int>& across, Charts& charts) {
+  const std::vector<std::vector<int>> chart_quads = renumber_charts(charts);
+  std::map<std::pair<int, int>, std::pair<int, int>> shared;  // (a, b), a < b -> (sides, one side of a)
+  for (size_t s = 0; s < across.size(); ++s) {
+    if (across[s] < 0) continue;
+    const int a = charts.quad_chart[s / 4], b = charts.quad_chart[across[s] / 4];
+    if (a >= b) continue;
+    auto& entry = shared.try_emplace({a, b}, 0, static_cast<int>(s)).first->second;
+    ++entry.first;
+  }
+  std::vector<std::tuple<int, int, int, int>> pairs;  // (-sides, a, b, side)
+  for (const auto& [ab, entry] : shared) pairs.emplace_back(-entry.first, ab.first, ab.second, entry.second);
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<char> touched(charts.count, 0);
+  bool merged = false;
+  for (const auto& [minus_sides, a, b, side] : pairs) {
+    if (touched[a] || touched[b]) continue;
+    if (!merge_if_rectangle(quads, chart_quads[a], chart_quads[b], glue_across(charts, side, across[side]), charts))
+      continue;
+    touched[a] = touched[b] = 1;
+    merged = true;
+  }
+  return merged;
+}
+
 Charts grow_charts(const QuadMesh& quads, const std::vector<int>& across) {
   const std::vector<char> cut = separatrix_cuts(quads, across);
   Charts charts;
@@ -176,13 +294,10 @@ Charts grow_charts(const QuadMesh& quads, const std::vector<int>& across) {
   charts.corner.resize(4 * quads.num_quads());
   for (int q = 0; q < quads.num_quads(); ++q)
     if (charts.quad_chart[q] < 0) grow_chart(quads, across, cut, q, charts);
+  while (merge_round(quads, across, charts)) {
+  }
+  renumber_charts(charts);
   return charts;
-}
-
-Point rotate(const Point& p, int turns) {  // by turns * 90 degrees, counter-clockwise
-  Point r = p;
-  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
-  return r;
 }
 
 // The lowest corner and the size (in cells) of the chart's corners turned by `turns` * 90 degrees.

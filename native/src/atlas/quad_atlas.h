@@ -6,8 +6,11 @@
 // placed beside the quad it was reached from; a quad joins only where its cell is free and each of
 // its vertices has one place in the chart (so a chart stops at the irregular vertices it would wind
 // around), and never across a separatrix of the quad mesh's irregular vertices (traced as a
-// motorcycle graph), so charts are the layout's grid rectangles. A chart is injective and its cells
-// are whole quads. Charts are packed bottom-left into the texture at whole-texel offsets, turned by
+// motorcycle graph), so charts are the layout's grid rectangles. Then neighbouring charts are merged
+// while their union is still injective and a rectangle of cells (pairs sharing the most edges first):
+// fewer seams, and rectangles still pack tightly (spot at 1 000 quads: 110 charts and 669 seam edges
+// become 45 and 426, texture use 82 % either way). A chart is injective and its cells are whole
+// quads. Charts are packed bottom-left into the texture at whole-texel offsets, turned by
 // 0 or 90 degrees, longest first, with `gutter` empty texels between charts and half of it at the
 // texture's sides: each chart has gutter / 2 texels of its own around it, which seam stitching
 // (atlas/stitch_seams.h) fills from the chart across each seam.
