@@ -1,10 +1,26 @@
-// Fuzzes the C API array entry point: arbitrary vertices (NaN, huge, duplicates) and triangles
-// (out of range, repeated, non-manifold) through a full intake job.
+// Fuzzes the C API array entry points: arbitrary vertices (NaN, huge, duplicates) and triangles
+// (out of range, repeated, non-manifold) through a full intake job, and through the atlas calls.
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
 #include "qgp/qgp.h"
+
+// The stateless atlas calls on the same arrays: the triangles as faces with UVs from the vertex values, the
+// index list as quads. Errors are expected; a crash, leak or sanitizer report is a finding.
+void fuzz_atlas_calls(uint8_t flags, const std::vector<double>& vertices, int nv, const std::vector<int32_t>& indices) {
+  const int64_t nf = static_cast<int64_t>(indices.size() / 3);
+  std::vector<int32_t> sizes(nf, 3);
+  std::vector<double> uv(6 * nf);
+  for (size_t c = 0; c < uv.size(); ++c) uv[c] = vertices.empty() ? 0.5 : vertices[c % vertices.size()] / 16.0;
+  std::vector<float> pixels(8 * 8 * 3, 0.5f);
+  qgp_stitch_seams(sizes.data(), nf, indices.data(), uv.data(), pixels.data(), 8, 8, 3, nullptr);
+  const int64_t nq = static_cast<int64_t>(indices.size() / 4);
+  std::vector<double> corner_uv(8 * nq);
+  int32_t info[5];
+  qgp_atlas_quads(vertices.data(), nv, indices.data(), nq, 16 + flags % 64, 16, 0, flags % 4, (flags >> 2) % 3,
+                  corner_uv.data(), info);
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 2) return 0;
@@ -26,6 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   while (pos + 3 <= size) {
     for (int k = 0; k < 3; ++k) triangles.push_back(static_cast<int32_t>(data[pos++] % raw_index_range) - 1);
   }
+  fuzz_atlas_calls(data[1], vertices, nv, triangles);
   qgp_session* s = nullptr;
   if (qgp_session_create(vertices.data(), nv, triangles.data(), static_cast<int64_t>(triangles.size() / 3), &s) !=
       QGP_OK)

@@ -545,3 +545,58 @@ TEST(CApiMeshes, LayoutLinesFollowTheTMesh) {
   EXPECT_LT(highest, 0.252) << "a point off the torus";
   qgp_session_free(s);
 }
+
+namespace {
+
+// A cube of six quads (counter-clockwise seen from outside): every vertex has three quads.
+struct QuadCube {
+  std::vector<double> vertices{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1};
+  std::vector<int32_t> quads{0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6, 3, 0, 4, 7};
+};
+
+}  // namespace
+
+TEST(CApi, AtlasAndStitchSeams) {
+  const QuadCube cube;
+  std::vector<double> uv(8 * 6, -1.0);
+  int32_t info[5] = {};
+  ASSERT_EQ(qgp_atlas_quads(cube.vertices.data(), 8, cube.quads.data(), 6, 64, 64, 0, 2, 0, uv.data(), info), QGP_OK)
+      << qgp_last_error();
+  EXPECT_GE(info[0], 1);  // charts
+  EXPECT_GE(info[1], 1);  // texels per quad
+  EXPECT_GT(info[2], 0);  // seam edges: the cube cannot lie flat in one piece
+  EXPECT_EQ(info[3], 2);  // gutter
+  for (double value : uv) EXPECT_TRUE(value >= 0 && value <= 1) << value;
+  std::vector<float> pixels(64 * 64 * 4);
+  for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<float>(i % 97) / 97.0f;
+  const std::vector<float> before = pixels;
+  std::vector<int32_t> sizes(6, 4);
+  int64_t stitched[4] = {};
+  ASSERT_EQ(qgp_stitch_seams(sizes.data(), 6, cube.quads.data(), uv.data(), pixels.data(), 64, 64, 4, stitched), QGP_OK)
+      << qgp_last_error();
+  EXPECT_EQ(stitched[0], info[2]);  // every seam edge stitched
+  EXPECT_EQ(stitched[1], 0);
+  EXPECT_EQ(stitched[3], info[0]);
+  EXPECT_NE(pixels, before);
+
+  // Refusals name what is wrong; nothing is written.
+  EXPECT_EQ(qgp_atlas_quads(cube.vertices.data(), 8, cube.quads.data(), 6, 64, 64, 0, 2, 0, nullptr, info),
+            QGP_ERR_INVALID_ARGUMENT);
+  std::vector<int32_t> bad = cube.quads;
+  bad[5] = 8;
+  EXPECT_EQ(qgp_atlas_quads(cube.vertices.data(), 8, bad.data(), 6, 64, 64, 0, 2, 0, uv.data(), info),
+            QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_last_error()).find("out of range"), std::string::npos) << qgp_last_error();
+  EXPECT_EQ(qgp_atlas_quads(cube.vertices.data(), 8, cube.quads.data(), 6, 8, 8, 4, 2, 0, uv.data(), info),
+            QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_last_error()).find("do not fit a 8 x 8 texture"), std::string::npos) << qgp_last_error();
+  EXPECT_EQ(qgp_atlas_quads(cube.vertices.data(), 8, cube.quads.data(), 6, 102, 102, 0, 2, 2, uv.data(), info),
+            QGP_ERR_INVALID_ARGUMENT);  // 102 is not a multiple of 4: 2 mip levels cannot stay seam-free
+  EXPECT_EQ(qgp_stitch_seams(sizes.data(), 6, cube.quads.data(), uv.data(), pixels.data(), 64, 64, 0, nullptr),
+            QGP_ERR_INVALID_ARGUMENT);
+  std::vector<double> nan_uv = uv;
+  nan_uv[3] = std::nan("");
+  EXPECT_EQ(qgp_stitch_seams(sizes.data(), 6, cube.quads.data(), nan_uv.data(), pixels.data(), 64, 64, 4, nullptr),
+            QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_last_error()).find("face corner 1"), std::string::npos) << qgp_last_error();
+}

@@ -378,7 +378,10 @@ bool pack_charts(const std::vector<Point>& size, int width, int height, int k, i
     Point best{0, 0};
     int best_turns = -1;
     for (int turns = 0; turns < 2; ++turns) {
-      const int w = k * size[c][turns] + gutter, h = k * size[c][1 - turns] + gutter;
+      const long long wide = static_cast<long long>(k) * size[c][turns] + gutter;
+      const long long high = static_cast<long long>(k) * size[c][1 - turns] + gutter;
+      if (wide > width || high > height) continue;
+      const int w = static_cast<int>(wide), h = static_cast<int>(high);
       Point at;
       if (!skyline.find(w, h, &at)) continue;
       const int top = at[1] + h;
@@ -420,12 +423,20 @@ int count_seam_edges(const std::vector<int>& across, const std::vector<int>& qua
 
 std::string size_text(int w, int h) { return std::to_string(w) + " x " + std::to_string(h); }
 
+constexpr int kLargestTexture = 65536;  // texels per side (and per quad, and of the gutter)
+
 void check_options(const QuadMesh& quads, const AtlasOptions& o) {
   if (o.texture_width <= 0 || o.texture_height <= 0 || o.texels_per_quad < 0 || o.gutter < 0)
     throw Error(ErrorCode::InvalidArgument, "atlas: texture " + size_text(o.texture_width, o.texture_height) + ", " +
                                                 std::to_string(o.texels_per_quad) + " texels per quad and a " +
                                                 std::to_string(o.gutter) +
                                                 "-texel gutter: sizes must be positive (texels per quad 0: chosen)");
+  if (o.texture_width > kLargestTexture || o.texture_height > kLargestTexture || o.gutter > kLargestTexture ||
+      o.texels_per_quad > kLargestTexture)
+    throw Error(ErrorCode::InvalidArgument, "atlas: texture " + size_text(o.texture_width, o.texture_height) + ", " +
+                                                std::to_string(o.texels_per_quad) + " texels per quad, gutter " +
+                                                std::to_string(o.gutter) + ": sizes up to " +
+                                                std::to_string(kLargestTexture) + " texels are possible");
   if (o.mip_levels < 0 || o.mip_levels > 8)
     throw Error(ErrorCode::InvalidArgument,
                 "atlas: " + std::to_string(o.mip_levels) + " seam-free mip levels asked; 0 to 8 are possible");

@@ -16,6 +16,7 @@ namespace {
 using Uv = std::array<double, 2>;  // in texels: (u * W, v * H)
 
 constexpr double kGridTolerance = 0.01;  // texels: how far a transition may be from the texel grid
+constexpr double kLargestUv = 1e6;       // atlas coordinates beyond are refused (no texture is that far off)
 
 // A transition between the two sides of a seam, in texel coordinates: p -> rotate(p, turns) + shift.
 struct Transition {
@@ -133,8 +134,9 @@ std::vector<int> texel_owners(const AtlasFaces& faces, int width, int height) {
     double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
     for (int c = begin; c < end; ++c)
       for (int d = 0; d < 2; ++d) lo[d] = std::min(lo[d], faces.uv[c][d]), hi[d] = std::max(hi[d], faces.uv[c][d]);
-    const int x0 = std::max(0, static_cast<int>(std::floor(lo[0]))), x1 = std::min(width - 1, int(std::ceil(hi[0])));
-    const int y0 = std::max(0, static_cast<int>(std::floor(lo[1]))), y1 = std::min(height - 1, int(std::ceil(hi[1])));
+    auto clamped = [](double value, int size) { return static_cast<int>(std::clamp(value, 0.0, size - 1.0)); };
+    const int x0 = clamped(std::floor(lo[0]), width), x1 = clamped(std::ceil(hi[0]), width);
+    const int y0 = clamped(std::floor(lo[1]), height), y1 = clamped(std::ceil(hi[1]), height);
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const double px = x + 0.5, py = y + 0.5;
@@ -252,8 +254,8 @@ class Stitcher {
     for (const auto& [distance, side] : candidates) {
       if (distance > candidates.front().first + 1.0) break;
       const Uv p = side->transition.apply(centre);
-      const int x = static_cast<int>(std::floor(p[0])), y = static_cast<int>(std::floor(p[1]));
-      if (x < 0 || y < 0 || x >= w || y >= image_.height) continue;
+      if (!(p[0] >= 0 && p[1] >= 0 && p[0] < w && p[1] < image_.height)) continue;
+      const int x = static_cast<int>(p[0]), y = static_cast<int>(p[1]);
       const int s = y * w + x;
       const int f = owner_[s] >= 0 ? owner_[s] : (stitched[s] && site_[s] >= 0 ? owner_[site_[s]] : -1);
       if (f >= 0 && chart_[f] == side->chart_across) return s;
@@ -297,9 +299,11 @@ void check_inputs(const PolygonSoup& faces, const std::vector<Uv>& corner_uv, co
     throw Error(ErrorCode::InvalidArgument, "stitch: " + std::to_string(corner_uv.size()) + " atlas coordinates for " +
                                                 std::to_string(faces.face_vertices.size()) + " face corners");
   for (size_t c = 0; c < corner_uv.size(); ++c)
-    if (!std::isfinite(corner_uv[c][0]) || !std::isfinite(corner_uv[c][1]))
-      throw Error(ErrorCode::InvalidArgument,
-                  "stitch: face corner " + std::to_string(c) + " has no finite atlas coordinate");
+    if (!(std::abs(corner_uv[c][0]) <= kLargestUv && std::abs(corner_uv[c][1]) <= kLargestUv))
+      throw Error(ErrorCode::InvalidArgument, "stitch: face corner " + std::to_string(c) +
+                                                  " has the atlas coordinate (" + std::to_string(corner_uv[c][0]) +
+                                                  ", " + std::to_string(corner_uv[c][1]) +
+                                                  "), not a number within 1e6 of the texture");
 }
 
 }  // namespace
