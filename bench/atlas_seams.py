@@ -1,13 +1,14 @@
 """Seams of a baked texture, rendered: Smart UV Project | the qgp atlas | the qgp atlas after `qgp stitch`.
 
     blender -b --factory-startup --python bench/atlas_seams.py -- [--qgp build/bin/qgp]
-        [--mesh ../shared/meshes/spot.obj] [--faces 1000] [--texture-size 128] [--out docs/images]
+        [--mesh ../shared/meshes/spot.obj] [--faces 1000] [--texture-size 512] [--out docs/images]
 
 `qgp remesh --atlas-out` makes the quads and their atlas; Blender (Cycles, emission bake, 1 sample,
 Blender's 16-texel margin) bakes two procedural 3D textures in object space into it (noise, and a checker
 of 3D cells); `qgp stitch` fills the gutters from across each seam; the same bake on a copy of the quads
-with Smart UV Project's UVs is beside it. A small texture (128 x 128 for 1 000 quads: 3 texels per quad)
-magnifies what happens at seams; the close-up renders the textures with linear filtering as emission.
+with Smart UV Project's UVs is beside it (512 x 512 texels for 1 000 quads: 14 texels per quad). The
+renders show the textures with linear filtering as emission; the checker's edges show where a seam
+breaks them.
 Writes OUT/atlas_seams.png (rows: noise, checker; columns as above).
 """
 import argparse
@@ -30,7 +31,7 @@ def parse_args():
     ap.add_argument("--qgp", default=os.path.join(REPO, "build", "bin", "qgp"))
     ap.add_argument("--mesh", default=os.path.join(os.path.dirname(REPO), "shared", "meshes", "spot.obj"))
     ap.add_argument("--faces", type=int, default=1000)
-    ap.add_argument("--texture-size", type=int, default=128)
+    ap.add_argument("--texture-size", type=int, default=512)
     ap.add_argument("--out", default=os.path.join(REPO, "docs", "images"))
     return ap.parse_args(argv)
 
@@ -57,8 +58,8 @@ def image_material(image):
     material.use_nodes = True
     nodes, links = material.node_tree.nodes, material.node_tree.links
     nodes.clear()
-    texture, emission, output = (nodes.new(t) for t in ("ShaderNodeTexImage", "ShaderNodeEmission",
-                                                         "ShaderNodeOutputMaterial"))
+    kinds = ("ShaderNodeTexImage", "ShaderNodeEmission", "ShaderNodeOutputMaterial")
+    texture, emission, output = (nodes.new(t) for t in kinds)
     texture.image, texture.interpolation = image, "Linear"
     links.new(texture.outputs["Color"], emission.inputs["Color"])
     links.new(emission.outputs["Emission"], output.inputs["Surface"])
