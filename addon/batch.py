@@ -1,12 +1,13 @@
 """Batch remeshing in Blender:
 
     blender -b --factory-startup --python addon/batch.py -- IN [IN ...] --out DIR
-            [--faces N | --edge-length L] [--sharp-angle DEG] [--uv] [--quads-per-unit Q]
+            [--faces N | --edge-length L] [--sharp-angle DEG] [--uv] [--quads-per-unit Q] [--atlas SIZE]
 
 or, with Blender as a Python module (PyPI's bpy, 4.2 and later), `python addon/batch.py -- IN ...`.
 
 Imports each mesh (OBJ, PLY, OFF; read by the native reader, polygons kept), runs Quantized Retopo
-(and Integer-Grid UVs with --uv), writes DIR/<name>.obj (and DIR/<name>_uv.obj) and
+(and Integer-Grid UVs with --uv), writes DIR/<name>.obj (with --atlas, its quads carry a texture
+atlas for a SIZE x SIZE texture as vt: Texture Atlas of Quantized Retopo) (and DIR/<name>_uv.obj) and
 DIR/report.json with one entry per input (status "ok", "partial" (parts of a many-part mesh kept as
 their triangles in the output) or "error"; reason, quads, seconds). Any failure of an
 input (a refused mesh, an unwritable output, a bug) is recorded with its reason and the batch goes
@@ -36,6 +37,7 @@ def parse_args():
     ap.add_argument("--sharp-angle", type=float, help="also keep edges sharper than DEG degrees")
     ap.add_argument("--uv", action="store_true", help="also write integer-grid UVs (<name>_uv.obj)")
     ap.add_argument("--quads-per-unit", type=float, default=1.0)
+    ap.add_argument("--atlas", type=int, metavar="SIZE", help="give the quads a texture atlas for SIZE x SIZE texels")
     return ap.parse_args(argv)
 
 
@@ -70,18 +72,18 @@ def activate(obj):
     bpy.context.view_layer.objects.active = obj
 
 
-def write_obj(path, obj, with_uv=False):
+def write_obj(path, obj, uv_layer=None):
+    """The object's mesh as OBJ; with uv_layer (a UV map's name), a vt per face corner from it."""
     mesh = obj.data
     with open(path, "w") as f:
         f.write(f"# {obj.name} - Quantized Retopo\n")
         for v in mesh.vertices:
             f.write("v %.9g %.9g %.9g\n" % tuple(v.co))
-        if with_uv:
-            uv = mesh.uv_layers["QGP Grid"].data
-            for loop in uv:
+        if uv_layer:
+            for loop in mesh.uv_layers[uv_layer].data:
                 f.write("vt %.9g %.9g\n" % tuple(loop.uv))
         for p in mesh.polygons:
-            if with_uv:
+            if uv_layer:
                 f.write("f " + " ".join(f"{v + 1}/{l + 1}" for v, l in zip(p.vertices, p.loop_indices)) + "\n")
             else:
                 f.write("f " + " ".join(str(v + 1) for v in p.vertices) + "\n")
@@ -102,7 +104,8 @@ def process(binding, blender_mesh, path, args):
         source = import_mesh(blender_mesh, path)
         name = source.name
         activate(source)
-        bpy.ops.object.qgp_quad_remesh(**target_kwargs(args), keep_source_visible=True)
+        atlas = {"texture_atlas": True, "atlas_size": args.atlas} if args.atlas else {}
+        bpy.ops.object.qgp_quad_remesh(**target_kwargs(args), keep_source_visible=True, **atlas)
         result = bpy.context.active_object
         if result is source or not result.name.startswith(name + "_quads"):
             raise RuntimeError("the operator did not create a quad object")
@@ -115,14 +118,18 @@ def process(binding, blender_mesh, path, args):
             entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
             if figures.get("rescued_parts", 0):
                 entry["reason"] = f"{figures['rescued_parts']} part(s) quadded finer or by splitting their triangles"
-        write_obj(os.path.join(args.out, name + ".obj"), result)
+        if args.atlas:
+            if "atlas" not in figures:
+                raise RuntimeError("no texture atlas: " + str(figures.get("atlas_note", "")))
+            entry["atlas"] = figures["atlas"].to_dict()
+        write_obj(os.path.join(args.out, name + ".obj"), result, "QGP Atlas" if args.atlas else None)
         if args.uv:
             activate(source)
             bpy.ops.object.qgp_grid_uv(**target_kwargs(args), quads_per_unit=args.quads_per_unit)
             # Where only a refined copy has a flip-free map, the operator made it the active object.
             mapped = bpy.context.active_object
             refined = mapped is not source and mapped.name.startswith(name + "_grid_uv")
-            write_obj(os.path.join(args.out, name + "_uv.obj"), mapped if refined else source, with_uv=True)
+            write_obj(os.path.join(args.out, name + "_uv.obj"), mapped if refined else source, "QGP Grid")
             entry["uv"] = True
             entry["uv_refined"] = refined
     except Exception as e:  # whatever failed, this input is recorded and the batch goes on

@@ -496,6 +496,7 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         try:
             info = atlas.write_atlas_uvs(obj.data, vertices, quads, self.atlas_size, self.atlas_mip_levels)
         except binding.QGPError as e:
+            obj["qgp"]["atlas_note"] = e.message
             return f"; no texture atlas: {e.message}", True
         obj["qgp"]["atlas"] = info
         return (f"; atlas: {info['charts']} charts, {info['texels_per_quad']} texels per quad, "

@@ -690,7 +690,7 @@ def test_batch():
 def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
     inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off", "joint.obj")]
-    proc, report = run_batch(BATCH, inputs, out, "--faces", "500", "--uv")
+    proc, report = run_batch(BATCH, inputs, out, "--faces", "500", "--uv", "--atlas", "512")
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
     # truck: no longer refused at intake (its non-manifold edges are cut); at 500 quads the parts
     # whose holes are narrower than a quad are rescued, as `qgp remesh truck.obj --faces 500` does:
@@ -712,7 +712,12 @@ def test_batch_success():
     for name in ("torus", "bunny", "joint"):
         path = os.path.join(out, name + ".obj")
         faces = [line for line in open(path) if line.startswith("f ")]
-        assert faces and all(len(line.split()) == 5 for line in faces), path
+        assert faces and all(len(line.split()) == 5 and "/" in line for line in faces), path
+        # --atlas 512: every quad corner has a vt in [0,1] (the texture atlas), the entry its figures
+        vt = [tuple(map(float, line.split()[1:3])) for line in open(path) if line.startswith("vt ")]
+        assert len(vt) == 4 * len(faces) and all(0 <= u <= 1 and 0 <= v <= 1 for u, v in vt), path
+        entry = next(e for e in report["entries"] if os.path.splitext(os.path.basename(e["input"]))[0] == name)
+        assert entry["atlas"]["charts"] >= 1 and entry["atlas"]["texels_per_quad"] >= 1, entry
         assert os.path.exists(os.path.join(out, name + "_uv.obj"))
     print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
 
