@@ -16,25 +16,13 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
 from shapes import grid_cube, moebius_strip, write_obj  # noqa: E402
 from test_cli_uv_out import read_obj as read_obj_vt  # noqa: E402
-
-FAILURES = []
-
-
-def check(condition, what):
-    print(("ok   " if condition else "FAIL ") + what)
-    if not condition:
-        FAILURES.append(what)
-
-
-def run(qgp, *args):
-    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
+from cli_checks import FAILURES, check, run  # noqa: E402
 
 
 def read_obj(path):

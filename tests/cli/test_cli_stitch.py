@@ -14,24 +14,13 @@ import argparse
 import json
 import os
 import random
-import subprocess
 import sys
 import tempfile
 
 import numpy as np
 from PIL import Image
 
-FAILURES = []
-
-
-def check(condition, what):
-    print(("ok   " if condition else "FAIL ") + what)
-    if not condition:
-        FAILURES.append(what)
-
-
-def run(qgp, *args):
-    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
+from cli_checks import FAILURES, check, run
 
 
 def read_atlas(path):

@@ -1,0 +1,14 @@
+"""What the CLI test scripts share: running qgp, and checks that print and collect failures."""
+import subprocess
+
+FAILURES = []
+
+
+def check(condition, what):
+    print(("ok   " if condition else "FAIL ") + what)
+    if not condition:
+        FAILURES.append(what)
+
+
+def run(qgp, *args):
+    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
