@@ -22,17 +22,11 @@
 #pragma once
 #include <vector>
 
+#include "atlas/packing.h"
 #include "core/json.h"
 #include "core/quad_mesh.h"
 
 namespace qgp {
-
-struct AtlasOptions {
-  int texture_width = 1024, texture_height = 1024;
-  int texels_per_quad = 0;  // K; 0: the largest K for which every chart fits
-  int gutter = 2;           // empty texels between charts (raised for mip_levels)
-  int mip_levels = 0;       // L: the mip levels 1 .. L stay seam-free (K a power of two >= 2^L)
-};
 
 struct QuadAtlas {
   // Per quad corner (row 4q + k: corner k of quad q), the atlas coordinate in [0,1]^2: texel

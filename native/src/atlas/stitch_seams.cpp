@@ -7,6 +7,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "atlas/corner_faces.h"
 #include "core/error.h"
 #include "core/union_find.h"
 
@@ -29,16 +30,7 @@ struct Transition {
   }
 };
 
-// The faces with their corners in texels, and per corner c the face it belongs to and the next corner.
-struct AtlasFaces {
-  const PolygonSoup& soup;
-  std::vector<Uv> uv;  // per corner, in texels
-  std::vector<int> corner_face;
-  int next(int c) const {
-    const int f = corner_face[c];
-    return c + 1 < soup.face_start[f + 1] ? c + 1 : soup.face_start[f];
-  }
-};
+using AtlasFaces = CornerFaces;  // corners in texels
 
 // A side of a face (from corner c to the next) on a seam, and the transition to the other side.
 struct SeamSide {
@@ -69,25 +61,6 @@ bool grid_transition(const Uv& a0, const Uv& a1, const Uv& b0, const Uv& b1, Tra
     return true;
   }
   return false;
-}
-
-uint64_t edge_key(int a, int b) {
-  return (static_cast<uint64_t>(static_cast<uint32_t>(std::min(a, b))) << 32) | static_cast<uint32_t>(std::max(a, b));
-}
-
-// Per corner, the corner of the side across (its edge runs the other way), or -1.
-std::vector<int> sides_across(const AtlasFaces& faces) {
-  const auto& fv = faces.soup.face_vertices;
-  std::unordered_map<uint64_t, std::vector<int>> sides;
-  for (size_t c = 0; c < fv.size(); ++c)
-    sides[edge_key(fv[c], fv[faces.next(static_cast<int>(c))])].push_back(static_cast<int>(c));
-  std::vector<int> across(fv.size(), -1);
-  for (const auto& [key, list] : sides) {
-    if (list.size() != 2 || fv[list[0]] != fv[faces.next(list[1])]) continue;
-    across[list[0]] = list[1];
-    across[list[1]] = list[0];
-  }
-  return across;
 }
 
 // Charts: faces joined across sides whose two corners coincide in the atlas.
@@ -310,11 +283,10 @@ void check_inputs(const PolygonSoup& faces, const std::vector<Uv>& corner_uv, co
 
 StitchReport stitch_seams(const PolygonSoup& soup, const std::vector<Uv>& corner_uv, AtlasImage& image) {
   check_inputs(soup, corner_uv, image);
-  AtlasFaces faces{soup, std::vector<Uv>(corner_uv.size()), std::vector<int>(corner_uv.size())};
+  std::vector<Uv> texels(corner_uv.size());
   for (size_t c = 0; c < corner_uv.size(); ++c)
-    faces.uv[c] = {corner_uv[c][0] * image.width, corner_uv[c][1] * image.height};
-  for (int f = 0; f < soup.num_faces(); ++f)
-    for (int c = soup.face_start[f]; c < soup.face_start[f + 1]; ++c) faces.corner_face[c] = f;
+    texels[c] = {corner_uv[c][0] * image.width, corner_uv[c][1] * image.height};
+  const AtlasFaces faces(soup, std::move(texels));
   StitchReport report;
   report.faces = soup.num_faces();
   Stitcher stitcher(faces, image, report);
