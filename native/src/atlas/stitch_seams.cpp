@@ -46,17 +46,17 @@ bool near(const Uv& a, const Uv& b) {
 // The transition taking a0 -> b0 and a1 -> b1 when it is a quarter turn plus whole texels, else false.
 bool grid_transition(const Uv& a0, const Uv& a1, const Uv& b0, const Uv& b1, Transition* t) {
   const Uv da = {a1[0] - a0[0], a1[1] - a0[1]}, db = {b1[0] - b0[0], b1[1] - b0[1]};
-  if (std::hypot(da[0], da[1]) < 0.5) return false;  // shorter than half a texel: no direction to match
-  for (int turns = 0; turns < 4; ++turns) {
+  for (int turns = 0; turns < 4; ++turns) {  // on a side shorter than the tolerance, the first turn with whole texels
     Transition candidate;
     candidate.turns = turns;
-    const Uv r = candidate.apply(da);
-    if (!near(r, db)) continue;
+    if (!near(candidate.apply(da), db)) continue;
     const Uv ra = candidate.apply(a0);
+    bool whole = true;
     for (int d = 0; d < 2; ++d) {
       candidate.shift[d] = std::round(b0[d] - ra[d]);
-      if (std::abs(b0[d] - ra[d] - candidate.shift[d]) > kGridTolerance) return false;
+      whole = whole && std::abs(b0[d] - ra[d] - candidate.shift[d]) <= kGridTolerance;
     }
+    if (!whole) continue;
     *t = candidate;
     return true;
   }
