@@ -165,4 +165,15 @@ AtlasPacking pack_atlas(const std::vector<TexelPoint>& chart_size, double cells,
   return packing;
 }
 
+void to_json(Json& j, const AtlasFigures& a) {
+  j = Json{{"charts", a.num_charts},
+           {"texels_per_quad", a.texels_per_quad},
+           {"texture_width", a.texture_width},
+           {"texture_height", a.texture_height},
+           {"seam_edges", a.seam_edges},
+           {"texture_use", a.texture_use},
+           {"gutter", a.gutter},
+           {"mip_levels", a.mip_levels}};
+}
+
 }  // namespace qgp

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/json.h"
+
 namespace qgp {
 
 struct AtlasOptions {
@@ -15,6 +17,15 @@ struct AtlasOptions {
   int gutter = 2;           // empty texels between charts (raised for mip_levels)
   int mip_levels = 0;       // L: the mip levels 1 .. L stay seam-free (K a power of two >= 2^L)
 };
+
+// What every atlas reports (the report's "atlas" / "uv_atlas" objects).
+struct AtlasFigures {
+  int num_charts = 0, texels_per_quad = 0, texture_width = 0, texture_height = 0;
+  int gutter = 0, mip_levels = 0;  // as used
+  int seam_edges = 0;              // edges whose two sides lie apart in the atlas
+  double texture_use = 0.0;        // texels covered by faces / all texels
+};
+void to_json(Json& j, const AtlasFigures& figures);
 
 using TexelPoint = std::array<int, 2>;
 

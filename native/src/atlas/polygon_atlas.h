@@ -19,12 +19,9 @@
 
 namespace qgp {
 
-struct PolygonAtlas {
-  std::vector<CornerUv> corner_uv;  // per corner (entry of face_vertices), in [0,1]^2
-  std::vector<int> face_chart;      // #faces
-  int num_charts = 0, texels_per_quad = 0, texture_width = 0, texture_height = 0, gutter = 0, mip_levels = 0;
-  int seam_edges = 0;        // edges whose two sides lie apart in the atlas (between charts, or a cut inside one)
-  double texture_use = 0.0;  // texels covered by faces (their grid area times K^2) / all texels
+struct PolygonAtlas : AtlasFigures {  // seam edges: between charts, or cuts inside one
+  std::vector<CornerUv> corner_uv;    // per corner (entry of face_vertices), in [0,1]^2
+  std::vector<int> face_chart;        // #faces
 };
 
 // faces: polygons; grid_uv: per corner, its integer-grid coordinate (1 unit = one quad: K texels).
@@ -32,8 +29,5 @@ struct PolygonAtlas {
 // that do not fit the texture (naming the sizes).
 PolygonAtlas build_polygon_atlas(const PolygonSoup& faces, const std::vector<CornerUv>& grid_uv,
                                  const AtlasOptions& options);
-
-// The "atlas" object of a report.
-void to_json(Json& j, const PolygonAtlas& atlas);
 
 }  // namespace qgp

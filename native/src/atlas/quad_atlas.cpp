@@ -377,15 +377,4 @@ QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options) {
   return atlas;
 }
 
-void to_json(Json& j, const QuadAtlas& a) {
-  j = Json{{"charts", a.num_charts},
-           {"texels_per_quad", a.texels_per_quad},
-           {"texture_width", a.texture_width},
-           {"texture_height", a.texture_height},
-           {"seam_edges", a.seam_edges},
-           {"texture_use", a.texture_use},
-           {"gutter", a.gutter},
-           {"mip_levels", a.mip_levels}};
-}
-
 }  // namespace qgp

@@ -28,17 +28,11 @@
 
 namespace qgp {
 
-struct QuadAtlas {
+struct QuadAtlas : AtlasFigures {  // seam edges: quad edges whose two quads lie in different charts
   // Per quad corner (row 4q + k: corner k of quad q), the atlas coordinate in [0,1]^2: texel
   // (x, y) of the texture spans [x/W, (x+1)/W] x [y/H, (y+1)/H].
   Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> corner_uv;
   std::vector<int> quad_chart;  // #Q: the chart of each quad
-  int num_charts = 0;
-  int texels_per_quad = 0;
-  int texture_width = 0, texture_height = 0;
-  int gutter = 0, mip_levels = 0;  // as used
-  int seam_edges = 0;              // quad edges whose two quads lie in different charts
-  double texture_use = 0.0;        // texels covered by quads / all texels
 };
 
 // quads: a quad mesh, counter-clockwise (edges with more than two quads are treated as seams).
@@ -46,8 +40,5 @@ struct QuadAtlas {
 // is not a power of two of at least 2^L or the texture's sides not multiples of 2^L), or when the
 // charts do not fit the texture at the K asked (or at the smallest K), naming the sizes.
 QuadAtlas build_quad_atlas(const QuadMesh& quads, const AtlasOptions& options);
-
-// The "atlas" object of the JSON report.
-void to_json(Json& j, const QuadAtlas& atlas);
 
 }  // namespace qgp
