@@ -223,9 +223,9 @@ DESCRIPTIONS = {
                 "is not used",
     "show_layout": "Also make an object '<name>_layout' with the quad layout's lines (the patches the quads "
                    "are laid out in), drawn in front",
-    "texture_atlas": "Give the quads a texture atlas (UV map 'QGP Atlas'): every quad a square of whole texels, "
-                     "charts packed into [0,1] without overlap, every seam a quarter turn plus whole texels, so "
-                     "Stitch Seams can hide the seams of a baked or painted image",
+    "texture_atlas": "Also write a texture atlas (UV map 'QGP Atlas'): every quad (grid cell) a square of whole "
+                     "texels, charts packed into [0,1] without overlap, every seam a quarter turn plus whole texels, "
+                     "so Stitch Seams can hide the seams of a baked or painted image",
     "atlas_size": "Width and height in texels of the texture the atlas is made for",
     "atlas_mip_levels": "Keep this many mip levels seam-free too (texels per quad a power of two, charts on "
                         "multiples of 2^levels texels, a wider gutter): the atlas uses less of the texture",
@@ -288,12 +288,7 @@ def draw_quad_output(layout, data):
     col.prop(data, "keep_attributes")
     col.prop(data, "keep_source_uvs")
     col.prop(data, "show_layout")
-    col = layout.column(align=True)
-    col.prop(data, "texture_atlas")
-    sub = col.column(align=True)
-    sub.active = data.texture_atlas
-    sub.prop(data, "atlas_size")
-    sub.prop(data, "atlas_mip_levels")
+    draw_atlas_options(layout, data)
 
 
 def draw_uv_output(layout, data):
@@ -301,6 +296,16 @@ def draw_uv_output(layout, data):
     layout.use_property_split = False
     layout.prop(data, "quads_per_unit")
     layout.prop(data, "mark_seams")
+    draw_atlas_options(layout, data)
+
+
+def draw_atlas_options(layout, data):
+    col = layout.column(align=True)
+    col.prop(data, "texture_atlas")
+    sub = col.column(align=True)
+    sub.active = data.texture_atlas
+    sub.prop(data, "atlas_size")
+    sub.prop(data, "atlas_mip_levels")
 
 
 def draw_section(layout, title, draw, data, *args):
@@ -343,7 +348,34 @@ class TargetSettings:
     weld: flag("weld", "Weld Open Edges", True)
 
 
-class _TargetProperties(TargetSettings):
+class AtlasSettings:
+    """The texture atlas options both operators take (and the panel holds)."""
+
+    texture_atlas: bpy.props.BoolProperty(name="Texture Atlas", default=False,
+                                          description=DESCRIPTIONS["texture_atlas"])
+    atlas_size: bpy.props.IntProperty(name="Texture Size", default=1024, min=16, max=16384,
+                                      description=DESCRIPTIONS["atlas_size"])
+    atlas_mip_levels: bpy.props.IntProperty(name="Seam-Free Mip Levels", default=0, min=0, max=6,
+                                            description=DESCRIPTIONS["atlas_mip_levels"])
+
+    def _write_atlas(self, make, figures=None):
+        """With Texture Atlas: make() writes the atlas and gives its figures, kept in `figures` (an object's
+        "qgp" property) if given; returns (message part, whether it failed)."""
+        if not self.texture_atlas:
+            return "", False
+        try:
+            info = make()
+        except binding.QGPError as e:
+            if figures is not None:
+                figures["atlas_note"] = e.message
+            return f"; no texture atlas: {e.message}", True
+        if figures is not None:
+            figures["atlas"] = info
+        return (f"; atlas: {info['charts']} charts, {info['texels_per_quad']} texels per quad, "
+                f"{100 * info['texture_use']:.0f} % of the {self.atlas_size} x {self.atlas_size} texture"), False
+
+
+class _TargetProperties(TargetSettings, AtlasSettings):
     """Density and feature options shared by both operators, and their common run."""
 
     @classmethod
@@ -439,12 +471,6 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
     show_layout: bpy.props.BoolProperty(name="Show Layout", default=False, description=DESCRIPTIONS["show_layout"])
     symmetry: bpy.props.BoolVectorProperty(name="Symmetry", size=3, subtype="XYZ", default=(False, False, False),
                                            description=DESCRIPTIONS["symmetry"])
-    texture_atlas: bpy.props.BoolProperty(name="Texture Atlas", default=False,
-                                          description=DESCRIPTIONS["texture_atlas"])
-    atlas_size: bpy.props.IntProperty(name="Texture Size", default=1024, min=16, max=16384,
-                                      description=DESCRIPTIONS["atlas_size"])
-    atlas_mip_levels: bpy.props.IntProperty(name="Seam-Free Mip Levels", default=0, min=0, max=6,
-                                            description=DESCRIPTIONS["atlas_mip_levels"])
 
     def _kept_of_source(self):
         return self.keep_attributes, self.keep_source_uvs
@@ -466,7 +492,8 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         message = f"{obj.name}: {len(quads)} quads in {obj['qgp']['seconds']:.1f} s"
         if obj["qgp"]["symmetry"]:
             message += f", mirror-symmetric in {obj['qgp']['symmetry'].upper()}"
-        atlas_note, atlas_failed = self._write_atlas(obj, vertices, quads)
+        atlas_note, atlas_failed = self._write_atlas(lambda: atlas.write_atlas_uvs(
+            obj.data, vertices, quads, self.atlas_size, self.atlas_mip_levels), obj["qgp"])
         message += atlas_note
         warn = bool(obj["qgp"]["count_note"]) or atlas_failed
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
@@ -488,19 +515,6 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
             warn = True
         self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
-
-    def _write_atlas(self, obj, vertices, quads):
-        """With Texture Atlas: the atlas UV layer; (message part, whether it failed)."""
-        if not self.texture_atlas:
-            return "", False
-        try:
-            info = atlas.write_atlas_uvs(obj.data, vertices, quads, self.atlas_size, self.atlas_mip_levels)
-        except binding.QGPError as e:
-            obj["qgp"]["atlas_note"] = e.message
-            return f"; no texture atlas: {e.message}", True
-        obj["qgp"]["atlas"] = info
-        return (f"; atlas: {info['charts']} charts, {info['texels_per_quad']} texels per quad, "
-                f"{100 * info['texture_use']:.0f} % of the {self.atlas_size} x {self.atlas_size} texture"), False
 
     def _make_layout_object(self, context):
         """The layout's lines as '<name>_layout'; a layout the library cannot give is a warning."""
@@ -561,7 +575,8 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
                 obj["qgp"] = _report_figures(self._session.report(), self, self._started,
                                              refined_components=int(refined), triangles=len(triangles),
                                              seams=seams)
-                self._report_uv_outcome(message, "are not in the copy")
+                atlas_note, atlas_failed = self._write_grid_atlas(obj.data, obj.data.uv_layers["QGP Grid"], obj["qgp"])
+                self._report_uv_outcome(message + atlas_note, "are not in the copy", warn=atlas_failed)
                 return {"FINISHED"}
         corner_uv, _ = self._session.grid_uv(len(self._source.triangles))
         mesh = self._source_obj.data
@@ -573,6 +588,8 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
             # loops are in one chart).
             seams = blender_mesh.mark_uv_seams(mesh, layer, _UV_SEAM_TOLERANCE / self.quads_per_unit)
             message += f", {seams} seam edges marked"
+        atlas_note, atlas_failed = self._write_grid_atlas(mesh, layer)
+        message += atlas_note
         mesh.update()
         # A map the global solve left flipped: its valid fallback lives on a refined mesh, which the
         # source object's loops cannot hold (Flip-Free Copy writes it as a new object).
@@ -581,8 +598,13 @@ class OBJECT_OT_qgp_grid_uv(_TargetProperties, _JobOperator, bpy.types.Operator)
         if flipped:
             hint = "no flip-free fallback was found" if self.flip_free_copy else "turn on Flip-Free Copy"
             message += f"; {flipped} triangle(s) of the map are flipped ({hint})"
-        self._report_uv_outcome(message, "got no grid UVs (left at 0, 0)", warn=flipped > 0)
+        self._report_uv_outcome(message, "got no grid UVs (left at 0, 0)", warn=flipped > 0 or atlas_failed)
         return {"FINISHED"}
+
+    def _write_grid_atlas(self, mesh, grid_layer, figures=None):
+        """With Texture Atlas, the atlas of the mesh's polygons from their grid UVs (AtlasSettings._write_atlas)."""
+        return self._write_atlas(lambda: atlas.write_polygon_atlas(
+            mesh, grid_layer, self.quads_per_unit, self.atlas_size, self.atlas_mip_levels), figures)
 
     def _report_uv_outcome(self, message, failed_parts_outcome, warn=False):
         """INFO, or WARNING when `warn` or when parts of a many-part mesh failed (named, with why)."""

@@ -2,11 +2,11 @@
 import bpy
 
 from .operators import (DESCRIPTIONS, OBJECT_OT_qgp_grid_uv, OBJECT_OT_qgp_quad_remesh, OBJECT_OT_qgp_stitch_seams,
-                        TargetSettings,
+                        AtlasSettings, TargetSettings,
                         draw_density, draw_features, draw_quad_output, draw_uv_output, flag)
 
 
-class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
+class QGP_Settings(TargetSettings, AtlasSettings, bpy.types.PropertyGroup):
     """The panel's options, passed to the operators by its buttons."""
 
     keep_source_visible: flag("keep_source_visible", "Keep Source Visible", False)
@@ -18,17 +18,11 @@ class QGP_Settings(TargetSettings, bpy.types.PropertyGroup):
     quads_per_unit: bpy.props.FloatProperty(name="Quads per UV Unit", default=1.0, min=1e-3, soft_max=64,
                                             description=DESCRIPTIONS["quads_per_unit"])
     mark_seams: flag("mark_seams", "Mark Seams", False)
-    texture_atlas: flag("texture_atlas", "Texture Atlas", False)
-    atlas_size: bpy.props.IntProperty(name="Texture Size", default=1024, min=16, max=16384,
-                                      description=DESCRIPTIONS["atlas_size"])
-    atlas_mip_levels: bpy.props.IntProperty(name="Seam-Free Mip Levels", default=0, min=0, max=6,
-                                            description=DESCRIPTIONS["atlas_mip_levels"])
 
 
 # The settings both operators take, and those of each one's output.
-_SHARED = tuple(TargetSettings.__annotations__)
-_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout", "symmetry", "texture_atlas",
-                "atlas_size", "atlas_mip_levels")
+_SHARED = tuple(TargetSettings.__annotations__) + tuple(AtlasSettings.__annotations__)
+_QUAD_OUTPUT = ("keep_source_visible", "keep_attributes", "keep_source_uvs", "show_layout", "symmetry")
 _UV_OUTPUT = ("quads_per_unit", "mark_seams")
 
 

@@ -110,6 +110,8 @@ def _declare(lib):
                                                 p_int32, c_int64, c_double, ctypes.c_char_p, c_int64, p_int64])
     sigs["qgp_atlas_quads"] = (c_int, [p_double, c_int64, p_int32, c_int64, c_int, c_int, c_int, c_int, c_int,
                                        p_double, p_int32])
+    sigs["qgp_atlas_polygons"] = (c_int, [p_int32, c_int64, p_int32, p_double, c_int, c_int, c_int, c_int, c_int,
+                                          p_double, p_int32])
     sigs["qgp_stitch_seams"] = (c_int, [p_int32, c_int64, p_int32, p_double, ctypes.POINTER(ctypes.c_float), c_int,
                                         c_int, c_int, p_int64])
     optional = {
@@ -194,6 +196,24 @@ def atlas_quads(vertices, quads, size, texels_per_quad=0, gutter=2, mip_levels=0
     status = lib.qgp_atlas_quads(_ptr(v, ctypes.c_double), len(v), _ptr(q, ctypes.c_int32), len(q), int(size),
                                  int(size), int(texels_per_quad), int(gutter), int(mip_levels),
                                  _ptr(uv, ctypes.c_double), _ptr(info, ctypes.c_int32))
+    if status != OK:
+        raise QGPError(status, lib.qgp_last_error().decode())
+    keys = ("charts", "texels_per_quad", "seam_edges", "gutter")
+    return uv, {**dict(zip(keys, map(int, info[:4]))), "texture_use": info[4] / 1e6}
+
+
+def atlas_polygons(face_sizes, corners, grid_uv, size, mip_levels=0):
+    """A texture atlas for polygons carrying an integer-grid map (grid_uv (c,2) per corner) on a size x size
+    texture: (corner UVs (c,2) in [0,1], figures as atlas_quads gives them)."""
+    lib = load_library()
+    sizes = np.ascontiguousarray(face_sizes, np.int32)
+    c = np.ascontiguousarray(corners, np.int32)
+    grid = np.ascontiguousarray(grid_uv, np.float64).reshape(-1, 2)
+    uv = np.empty_like(grid)
+    info = np.zeros(5, np.int32)
+    status = lib.qgp_atlas_polygons(_ptr(sizes, ctypes.c_int32), len(sizes), _ptr(c, ctypes.c_int32),
+                                    _ptr(grid, ctypes.c_double), int(size), int(size), 0, 2, int(mip_levels),
+                                    _ptr(uv, ctypes.c_double), _ptr(info, ctypes.c_int32))
     if status != OK:
         raise QGPError(status, lib.qgp_last_error().decode())
     keys = ("charts", "texels_per_quad", "seam_edges", "gutter")

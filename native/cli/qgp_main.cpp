@@ -22,6 +22,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "atlas/polygon_atlas.h"
 #include "atlas/quad_atlas.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -80,7 +81,7 @@ void report_abnormal_ends() {
 }
 
 struct CommandLine {
-  std::string command, input, output, report, features, uv_out, layout_out, density, atlas_out;
+  std::string command, input, output, report, features, uv_out, layout_out, density, atlas_out, uv_atlas_out;
   int texture_size = 1024;
   qgp::AtlasOptions atlas;
   std::string quantizer = "greedy", symmetry;
@@ -142,6 +143,11 @@ void add_commands(CLI::App& app, CommandLine& cl) {
   remesh->add_option("--atlas-out", cl.atlas_out,
                      "write the quad mesh again with a texture atlas as per-corner vt in [0,1]: every quad a square of "
                      "whole texels, charts packed without overlap, every seam a 90-degree turn plus whole texels");
+  CLI::Option* uv_atlas_out = remesh->add_option(
+      "--uv-atlas-out", cl.uv_atlas_out,
+      "write the integer-grid map's triangles (as --uv-out) with a texture atlas of them as per-corner "
+      "vt in [0,1]: charts cut along triangle edges, packed without overlap, every seam a 90-degree "
+      "turn plus whole texels (--texture-size and the other atlas options apply)");
   remesh->add_option("--texture-size", cl.texture_size, "the atlas texture's width and height in texels (default 1024)")
       ->check(CLI::Range(1, 65536));
   remesh
@@ -169,7 +175,8 @@ void add_commands(CLI::App& app, CommandLine& cl) {
           return std::string(e.what());
         }
       })
-      ->excludes(uv_out);
+      ->excludes(uv_out)
+      ->excludes(uv_atlas_out);
   remesh
       ->add_option("--quantizer", cl.quantizer, "greedy (the paper's, default) or round (the direct-rounding baseline)")
       ->check(CLI::IsMember({"greedy", "round"}));
@@ -332,6 +339,40 @@ bool write_atlas_output(const CommandLine& cl, const qgp::Session& session, qgp:
   }
 }
 
+// --uv-atlas-out: the integer-grid map's triangles with a texture atlas of them (atlas/polygon_atlas.h), and the
+// report's "uv_atlas" object; false (with a message) when there is no integer-grid map or no atlas.
+bool write_uv_atlas_output(const CommandLine& cl, const qgp::Session& session, qgp::Json& report) {
+  if (cl.uv_atlas_out.empty()) return true;
+  try {
+    qgp::UvMapKind kind = qgp::UvMapKind::Seamless;
+    if (!qgp::available_uv_map(session, &kind) || kind != qgp::UvMapKind::IntegerGrid)
+      throw qgp::Error(qgp::ErrorCode::StageFailed,
+                       "no integer-grid map for every part; '" + cl.uv_atlas_out + "' not written");
+    const qgp::UvMesh map = qgp::compose_uv_mesh(session, kind);
+    qgp::PolygonSoup triangles;
+    for (int f = 0; f < map.mesh.num_faces(); ++f) triangles.add_face(map.mesh.F.row(f).data(), 3);
+    std::vector<qgp::CornerUv> grid_uv(map.uv.rows());
+    for (size_t c = 0; c < grid_uv.size(); ++c) grid_uv[c] = {map.uv(c, 0), map.uv(c, 1)};
+    qgp::AtlasOptions options = cl.atlas;
+    options.texture_width = options.texture_height = cl.texture_size;
+    const qgp::PolygonAtlas atlas = qgp::build_polygon_atlas(triangles, grid_uv, options);
+    report["uv_atlas"] = atlas;
+    qgp::cli::UvMatrix uv(atlas.corner_uv.size(), 2);
+    for (size_t c = 0; c < atlas.corner_uv.size(); ++c) uv.row(c) << atlas.corner_uv[c][0], atlas.corner_uv[c][1];
+    std::ostringstream header;
+    header << "qgp integer-grid map of " << cl.input << " with a texture atlas: " << atlas.texture_width << " x "
+           << atlas.texture_height << " texels, " << atlas.texels_per_quad << " per grid unit, " << atlas.num_charts
+           << " charts";
+    qgp::cli::write_obj(cl.uv_atlas_out, map.mesh, &uv, header.str());
+    std::cout << "uv atlas: " << atlas.num_charts << " charts, " << atlas.texels_per_quad << " texels per quad, "
+              << static_cast<int>(100 * atlas.texture_use + 0.5) << " % of the texture used\n";
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "qgp: " << e.what() << "\n";
+    return false;
+  }
+}
+
 // Writes whatever the session has for the optional outputs; false if a requested one could not be
 // written (with a message). After a failed run (run_failed) an output the run did not get to is
 // named but is not a write failure: the run's own error decides the exit code.
@@ -403,7 +444,7 @@ int run(const CommandLine& cl) {
   try {
     session = std::make_unique<qgp::Session>(qgp::read_mesh_file(cl.input));
     qgp::RemeshOptions options = cl.options;
-    options.fallback_uv_map = !cl.uv_out.empty();
+    options.fallback_uv_map = !cl.uv_out.empty() || !cl.uv_atlas_out.empty();
     if (!cl.features.empty()) options.feature_edges = read_feature_pairs(cl.features);
     if (!cl.density.empty()) options.density = read_density(cl.density);
     session->set_options(options);
@@ -440,6 +481,7 @@ int run(const CommandLine& cl) {
       written = false;
     }
     written = write_atlas_output(cl, *session, report) && written;
+    written = write_uv_atlas_output(cl, *session, report) && written;
     print_remesh_summary(report);
     print_rescued_components(report);
   }

@@ -7,7 +7,8 @@ is active, every UV in [0,1], no texel covered twice (rasterized at texel resolu
 the atlas; Stitch Seams then fills the gutters; 1 000 random seam points (not within a texel of an
 irregular vertex) are sampled bilinearly from both sides of their seam. After stitching the largest colour
 difference must be at most 1/255; before (Blender's margin only) and on a copy of the quads with Smart UV
-Project's UVs (bake and margin the same) it is measured and printed beside it.
+Project's UVs (bake and margin the same) it is measured and printed beside it. Then Integer-Grid UVs with
+Texture Atlas on spot's own triangles: no texel twice, every seam texel-aligned.
 """
 import os
 import random
@@ -141,6 +142,38 @@ def check_atlas_layer(quad):
     return covered.sum() / SIZE ** 2
 
 
+def check_grid_uv_atlas(binding, module):
+    """Integer-Grid UVs with Texture Atlas on spot's own triangles: 'QGP Atlas' active beside 'QGP Grid', UVs in
+    [0,1], no texel centre in two triangles, every seam a quarter turn plus whole texels (stitching matches them
+    all), the source's geometry unchanged."""
+    addon_checks.reset_scene()
+    source = addon_checks.import_mesh(binding, os.path.join(MESHES, "spot.obj"))
+    before = addon_checks.mesh_data_state(source)[:7]  # all but the UV maps, selection and modifiers
+    assert bpy.ops.object.qgp_grid_uv(target_faces=1000, texture_atlas=True, atlas_size=SIZE,
+                                      flip_free_copy=False) == {"FINISHED"}
+    mesh = source.data
+    assert mesh.uv_layers.active.name == "QGP Atlas" and "QGP Grid" in mesh.uv_layers, list(mesh.uv_layers.keys())
+    faces = loop_data(mesh, mesh.uv_layers["QGP Atlas"])
+    covered = np.zeros((SIZE, SIZE), int)
+    for f in faces:
+        p = np.array([uv for _, uv in f]) * SIZE
+        assert p.min() >= 0 and p.max() <= SIZE, p
+        lo, hi = np.floor(p.min(0)).astype(int), np.ceil(p.max(0)).astype(int)
+        xs, ys = np.meshgrid(np.arange(lo[0], hi[0]) + 0.5, np.arange(lo[1], hi[1]) + 0.5)
+        inside = np.ones(xs.shape, bool)
+        for k in range(3):
+            a, b = p[k], p[(k + 1) % 3]
+            inside &= (b[0] - a[0]) * (ys - a[1]) - (b[1] - a[1]) * (xs - a[0]) >= 0
+        covered[lo[1]:hi[1], lo[0]:hi[0]] += inside
+    assert covered.max() <= 1, "a texel centre in two triangles"
+    image = bpy.data.images.new("spot_grid_atlas", SIZE, SIZE)
+    info = module.atlas.stitch_image(mesh, mesh.uv_layers["QGP Atlas"], image)
+    assert info["unmatched_seam_edges"] == 0 and info["seam_edges"] > 0, info
+    assert addon_checks.mesh_data_state(source)[:7] == before, "Integer-Grid UVs changed the geometry"
+    print(f"Integer-Grid UVs atlas on spot's {len(faces)} triangles: {100 * (covered > 0).mean():.0f} % of the "
+          f"texture covered, no texel twice, {info['seam_edges']} seam edges all texel-aligned")
+
+
 def main():
     module = addon_checks.install_legacy_addon(REPO, "quantized_retopo")
     binding = sys.modules[module.__name__ + ".core.binding"]
@@ -173,6 +206,7 @@ def main():
           f"{255 * smart_difference:.2f}/255")
     assert margin_only > 1 / 255, "the unstitched seams already agree: the check cannot fail"
     assert stitched <= 1 / 255, f"stitched seams differ by {255 * stitched:.2f}/255"
+    check_grid_uv_atlas(binding, module)
     print("atlas bake test: OK")
 
 

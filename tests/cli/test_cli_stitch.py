@@ -8,7 +8,8 @@ unchanged, and bilinear samples at 1 000 random seam points (not within a texel 
 boundary vertex) read from the two sides of the seam differ by at most 1/255, at every mip level the
 atlas keeps seam-free (box-filtered here). Then the refusals: an OBJ without vt (exit 1), a missing
 image (exit 2), an unwritable output (exit 1); an atlas whose seams are not texel-aligned (spot's own
-UVs) is filled as borders there, with a warning.
+UVs) is filled as borders there, with a warning. --uv-atlas-out (the integer-grid map's triangles with an
+atlas): vt in [0,1], every seam texel-aligned.
 """
 import argparse
 import json
@@ -154,6 +155,24 @@ def test_stitch(qgp, meshes, tmp):
           f"--mip-levels 2: texels per quad a power of two >= 4 ({k}), gutter a multiple of 8 ({r['gutter']})")
 
 
+def test_uv_atlas(qgp, meshes, tmp):
+    """--uv-atlas-out: the integer-grid map's triangles with an atlas: vt in [0,1], and every seam texel-aligned
+    (qgp stitch matches them all)."""
+    atlas, report, png = (os.path.join(tmp, n) for n in ("uv_atlas.obj", "uv.json", "blank.png"))
+    proc = run(qgp, "remesh", os.path.join(meshes, "camelhead.off"), "-o", os.path.join(tmp, "q.obj"), "--faces", 1000,
+               "--uv-atlas-out", atlas, "--texture-size", 512, "--report", report)
+    r = json.load(open(report)).get("uv_atlas", {})
+    check(proc.returncode == 0 and r.get("charts", 0) >= 1 and "uv atlas: " in proc.stdout,
+          f"--uv-atlas-out: exit 0, the report's uv_atlas {r}")
+    vt = [tuple(map(float, line.split()[1:3])) for line in open(atlas) if line.startswith("vt ")]
+    check(vt and all(0 <= u <= 1 and 0 <= v <= 1 for u, v in vt), f"--uv-atlas-out: {len(vt)} vt, all in [0,1]")
+    save_png(png, np.zeros((512, 512, 3)))
+    proc = run(qgp, "stitch", atlas, png, "-o", os.path.join(tmp, "stitched.png"), "--report", report)
+    s = json.load(open(report)).get("stitch", {})
+    check(proc.returncode == 0 and s.get("unmatched_seam_edges") == 0 and s.get("seam_edges") == r.get("seam_edges"),
+          f"--uv-atlas-out: every seam maps texels onto texels ({s})")
+
+
 def test_refusals(qgp, meshes, tmp):
     png = os.path.join(tmp, "baked.png")
     save_png(png, np.zeros((8, 8, 3)))
@@ -174,7 +193,7 @@ def main():
     ap.add_argument("--meshes", required=True)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        for test in (test_stitch, test_refusals):
+        for test in (test_stitch, test_uv_atlas, test_refusals):
             print(f"== {test.__name__}")
             test(args.qgp, args.meshes, tmp)
     print(f"{len(FAILURES)} failure(s)")

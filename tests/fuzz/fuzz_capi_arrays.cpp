@@ -13,6 +13,10 @@ void fuzz_atlas_calls(uint8_t flags, const std::vector<double>& vertices, int nv
   std::vector<int32_t> sizes(nf, 3);
   std::vector<double> uv(6 * nf);
   for (size_t c = 0; c < uv.size(); ++c) uv[c] = vertices.empty() ? 0.5 : vertices[c % vertices.size()] / 16.0;
+  std::vector<double> atlas_uv(6 * nf);
+  int32_t polygon_info[5];
+  qgp_atlas_polygons(sizes.data(), nf, indices.data(), uv.data(), 32, 32, 0, flags % 3, 0, atlas_uv.data(),
+                     polygon_info);
   std::vector<float> pixels(8 * 8 * 3, 0.5f);
   qgp_stitch_seams(sizes.data(), nf, indices.data(), uv.data(), pixels.data(), 8, 8, 3, nullptr);
   const int64_t nq = static_cast<int64_t>(indices.size() / 4);

@@ -600,3 +600,30 @@ TEST(CApi, AtlasAndStitchSeams) {
             QGP_ERR_INVALID_ARGUMENT);
   EXPECT_NE(std::string(qgp_last_error()).find("face corner 1"), std::string::npos) << qgp_last_error();
 }
+
+TEST(CApi, AtlasOfPolygonsWithAGridMap) {
+  const QuadCube cube;  // each side mapped onto its own unit square of the grid: every edge a cut
+  std::vector<double> grid(8 * 6);
+  for (int q = 0; q < 6; ++q) {
+    const double corners[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    for (int k = 0; k < 8; ++k) grid[8 * q + k] = corners[k] + (k % 2 == 0 ? 3 * q : 0);
+  }
+  std::vector<int32_t> sizes(6, 4);
+  std::vector<double> uv(8 * 6, -1.0);
+  int32_t info[5] = {};
+  ASSERT_EQ(qgp_atlas_polygons(sizes.data(), 6, cube.quads.data(), grid.data(), 64, 64, 0, 2, 0, uv.data(), info),
+            QGP_OK)
+      << qgp_last_error();
+  EXPECT_EQ(info[0], 6);   // charts: no side continues into another
+  EXPECT_EQ(info[2], 12);  // seam edges: all
+  for (double value : uv) EXPECT_TRUE(value >= 0 && value <= 1) << value;
+  std::vector<float> pixels(64 * 64 * 3, 0.25f);
+  int64_t stitched[4] = {};
+  ASSERT_EQ(qgp_stitch_seams(sizes.data(), 6, cube.quads.data(), uv.data(), pixels.data(), 64, 64, 3, stitched),
+            QGP_OK);
+  EXPECT_EQ(stitched[1], 0) << "seams that do not map texels onto texels";
+  grid[3] = std::nan("");
+  EXPECT_EQ(qgp_atlas_polygons(sizes.data(), 6, cube.quads.data(), grid.data(), 64, 64, 0, 2, 0, uv.data(), info),
+            QGP_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(qgp_last_error()).find("face corner 1"), std::string::npos) << qgp_last_error();
+}

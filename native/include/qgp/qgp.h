@@ -188,6 +188,15 @@ QGP_API int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const 
                             int texture_width, int texture_height, int texels_per_quad, int gutter, int mip_levels,
                             double* corner_uv, int32_t* info);
 
+/* The same for polygons carrying an integer-grid map (e.g. Integer-Grid UVs' per-corner coordinates, 1
+ * unit = 1 quad = K texels): faces face_sizes nf, corners sum(face_sizes) vertex indices (edges are
+ * matched by them), grid_uv (u, v) per corner. Charts grow across sides continuous in the map without
+ * overlapping; every seam maps texels onto texels. corner_uv gets (u, v) in [0,1] per corner, info as
+ * above. */
+QGP_API int qgp_atlas_polygons(const int32_t* face_sizes, int64_t num_faces, const int32_t* corners,
+                               const double* grid_uv, int texture_width, int texture_height, int texels_per_quad,
+                               int gutter, int mip_levels, double* corner_uv, int32_t* info);
+
 /* Seam stitching of an image in a grid-aligned atlas (e.g. the one above): fills the empty texels
  * beside each seam from across it, so bilinear samples agree on both sides. Faces: face_sizes nf,
  * corners sum(face_sizes) vertex indices (edges are matched by them); corner_uv: (u, v) per corner.

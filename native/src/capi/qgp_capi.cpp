@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "atlas/polygon_atlas.h"
 #include "atlas/quad_atlas.h"
 #include "atlas/stitch_seams.h"
 #include "core/error.h"
@@ -558,6 +559,26 @@ qgp::PolygonSoup polygon_arrays(const double* vertices, int64_t num_vertices, co
   return mesh;
 }
 
+// Polygons given by their sizes and corners only (positions are not needed), and their per-corner coordinates.
+std::pair<qgp::PolygonSoup, std::vector<qgp::CornerUv>> polygons_with_uv(const int32_t* face_sizes, int64_t num_faces,
+                                                                         const int32_t* corners, const double* uv) {
+  int64_t num_corners = 0;
+  for (int64_t f = 0; f < num_faces; ++f) num_corners += std::max(face_sizes[f], 0);
+  require(num_corners < INT32_MAX, "too many face corners");
+  const int64_t num_vertices = num_corners > 0 ? int64_t{*std::max_element(corners, corners + num_corners)} + 1 : 0;
+  std::vector<qgp::CornerUv> corner_uv(num_corners);
+  for (int64_t c = 0; c < num_corners; ++c) corner_uv[c] = {uv[2 * c], uv[2 * c + 1]};
+  return {polygon_arrays(nullptr, num_vertices, face_sizes, num_faces, corners), std::move(corner_uv)};
+}
+
+// An atlas's figures as the C API gives them: charts, texels per quad, seam edges, gutter, texture use (millionths).
+void atlas_info(const qgp::AtlasFigures& atlas, int32_t* info) {
+  if (!info) return;
+  const int32_t values[5] = {atlas.num_charts, atlas.texels_per_quad, atlas.seam_edges, atlas.gutter,
+                             static_cast<int32_t>(1e6 * atlas.texture_use)};
+  std::copy_n(values, 5, info);
+}
+
 }  // namespace
 
 int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const int32_t* quads, int64_t num_quads,
@@ -575,11 +596,23 @@ int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const int32_t*
     const qgp::QuadAtlas atlas = qgp::build_quad_atlas(
         mesh, qgp::AtlasOptions{texture_width, texture_height, texels_per_quad, gutter, mip_levels});
     std::copy_n(atlas.corner_uv.data(), atlas.corner_uv.size(), corner_uv);
-    if (info) {
-      const int32_t values[5] = {atlas.num_charts, atlas.texels_per_quad, atlas.seam_edges, atlas.gutter,
-                                 static_cast<int32_t>(1e6 * atlas.texture_use)};
-      std::copy_n(values, 5, info);
-    }
+    atlas_info(atlas, info);
+    return QGP_OK;
+  });
+}
+
+int qgp_atlas_polygons(const int32_t* face_sizes, int64_t num_faces, const int32_t* corners, const double* grid_uv,
+                       int texture_width, int texture_height, int texels_per_quad, int gutter, int mip_levels,
+                       double* corner_uv, int32_t* info) {
+  return guarded(nullptr, [&] {
+    require(num_faces >= 0, "counts out of range");
+    require((num_faces == 0 || (face_sizes && corners && grid_uv)) && corner_uv, "an array is null");
+    const auto [faces, uv] = polygons_with_uv(face_sizes, num_faces, corners, grid_uv);
+    const qgp::PolygonAtlas atlas = qgp::build_polygon_atlas(
+        faces, uv, qgp::AtlasOptions{texture_width, texture_height, texels_per_quad, gutter, mip_levels});
+    for (size_t c = 0; c < uv.size(); ++c)
+      corner_uv[2 * c] = atlas.corner_uv[c][0], corner_uv[2 * c + 1] = atlas.corner_uv[c][1];
+    atlas_info(atlas, info);
     return QGP_OK;
   });
 }
@@ -589,13 +622,7 @@ int qgp_stitch_seams(const int32_t* face_sizes, int64_t num_faces, const int32_t
   return guarded(nullptr, [&] {
     require(num_faces >= 0 && width > 0 && height > 0 && channels > 0 && channels <= 4, "sizes out of range");
     require((num_faces == 0 || (face_sizes && corners && corner_uv)) && pixels, "an array is null");
-    int64_t num_corners = 0;
-    for (int64_t f = 0; f < num_faces; ++f) num_corners += std::max(face_sizes[f], 0);
-    require(num_corners < INT32_MAX, "too many face corners");
-    const int64_t num_vertices = num_corners > 0 ? int64_t{*std::max_element(corners, corners + num_corners)} + 1 : 0;
-    const qgp::PolygonSoup faces = polygon_arrays(nullptr, num_vertices, face_sizes, num_faces, corners);
-    std::vector<std::array<double, 2>> uv(num_corners);
-    for (int64_t c = 0; c < num_corners; ++c) uv[c] = {corner_uv[2 * c], corner_uv[2 * c + 1]};
+    const auto [faces, uv] = polygons_with_uv(face_sizes, num_faces, corners, corner_uv);
     qgp::AtlasImage image{width, height, channels, {}};
     const size_t size = static_cast<size_t>(width) * height * channels;
     image.texels.assign(pixels, pixels + size);
