@@ -198,8 +198,13 @@ def atlas_quads(vertices, quads, size, texels_per_quad=0, gutter=2, mip_levels=0
                                  _ptr(uv, ctypes.c_double), _ptr(info, ctypes.c_int32))
     if status != OK:
         raise QGPError(status, lib.qgp_last_error().decode())
+    return uv, _atlas_figures(info)
+
+
+def _atlas_figures(info):
+    """The 5 ints an atlas call gives as a dict."""
     keys = ("charts", "texels_per_quad", "seam_edges", "gutter")
-    return uv, {**dict(zip(keys, map(int, info[:4]))), "texture_use": info[4] / 1e6}
+    return {**dict(zip(keys, map(int, info[:4]))), "texture_use": info[4] / 1e6}
 
 
 def atlas_polygons(face_sizes, corners, grid_uv, size, mip_levels=0):
@@ -216,8 +221,7 @@ def atlas_polygons(face_sizes, corners, grid_uv, size, mip_levels=0):
                                     _ptr(uv, ctypes.c_double), _ptr(info, ctypes.c_int32))
     if status != OK:
         raise QGPError(status, lib.qgp_last_error().decode())
-    keys = ("charts", "texels_per_quad", "seam_edges", "gutter")
-    return uv, {**dict(zip(keys, map(int, info[:4]))), "texture_use": info[4] / 1e6}
+    return uv, _atlas_figures(info)
 
 
 def stitch_seams(face_sizes, corners, corner_uv, pixels, width, height, channels):

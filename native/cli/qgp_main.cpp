@@ -316,6 +316,11 @@ void write_layout_output(const std::string& path, const qgp::Session& session) {
   qgp::write_layout_obj(path, meshes, tmeshes);
 }
 
+void print_atlas_summary(const char* label, const qgp::AtlasFigures& atlas) {
+  std::cout << label << ": " << atlas.num_charts << " charts, " << atlas.texels_per_quad << " texels per quad, "
+            << static_cast<int>(100 * atlas.texture_use + 0.5) << " % of the texture used\n";
+}
+
 // --atlas-out: the quad mesh with its texture atlas (atlas/quad_atlas.h), and the report's "atlas"
 // object; false (with a message) when the atlas cannot be made or written.
 bool write_atlas_output(const CommandLine& cl, const qgp::Session& session, qgp::Json& report) {
@@ -330,8 +335,7 @@ bool write_atlas_output(const CommandLine& cl, const qgp::Session& session, qgp:
            << atlas.texture_height << " texels, " << atlas.texels_per_quad << " per quad side, " << atlas.num_charts
            << " charts";
     qgp::cli::write_quad_obj(cl.atlas_out, *session.quad_result(), nullptr, {}, header.str(), &atlas.corner_uv);
-    std::cout << "atlas: " << atlas.num_charts << " charts, " << atlas.texels_per_quad << " texels per quad, "
-              << static_cast<int>(100 * atlas.texture_use + 0.5) << " % of the texture used\n";
+    print_atlas_summary("atlas", atlas);
     return true;
   } catch (const std::exception& e) {
     std::cerr << "qgp: " << e.what() << "\n";
@@ -364,8 +368,7 @@ bool write_uv_atlas_output(const CommandLine& cl, const qgp::Session& session, q
            << atlas.texture_height << " texels, " << atlas.texels_per_quad << " per grid unit, " << atlas.num_charts
            << " charts";
     qgp::cli::write_obj(cl.uv_atlas_out, map.mesh, &uv, header.str());
-    std::cout << "uv atlas: " << atlas.num_charts << " charts, " << atlas.texels_per_quad << " texels per quad, "
-              << static_cast<int>(100 * atlas.texture_use + 0.5) << " % of the texture used\n";
+    print_atlas_summary("uv atlas", atlas);
     return true;
   } catch (const std::exception& e) {
     std::cerr << "qgp: " << e.what() << "\n";

@@ -12,3 +12,9 @@ def check(condition, what):
 
 def run(qgp, *args):
     return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
+
+
+def summary():
+    """Prints how many checks failed; the exit status (1 if any did)."""
+    print(f"{len(FAILURES)} failure(s)")
+    return 1 if FAILURES else 0

@@ -22,7 +22,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/: shapes
 from shapes import grid_cube, moebius_strip, write_obj  # noqa: E402
 from test_cli_uv_out import read_obj as read_obj_vt  # noqa: E402
-from cli_checks import FAILURES, check, run  # noqa: E402
+from cli_checks import check, run, summary  # noqa: E402
 
 
 def read_obj(path):
@@ -407,8 +407,7 @@ def main():
                 test(args.qgp, tmp)
             else:
                 test(args.qgp, args.meshes, tmp)
-    print(f"{len(FAILURES)} failure(s)")
-    return 1 if FAILURES else 0
+    return summary()
 
 
 if __name__ == "__main__":

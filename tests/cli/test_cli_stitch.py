@@ -21,7 +21,7 @@ import tempfile
 import numpy as np
 from PIL import Image
 
-from cli_checks import FAILURES, check, run
+from cli_checks import check, run, summary
 
 
 def read_atlas(path):
@@ -196,8 +196,7 @@ def main():
         for test in (test_stitch, test_uv_atlas, test_refusals):
             print(f"== {test.__name__}")
             test(args.qgp, args.meshes, tmp)
-    print(f"{len(FAILURES)} failure(s)")
-    return 1 if FAILURES else 0
+    return summary()
 
 
 if __name__ == "__main__":

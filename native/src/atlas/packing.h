@@ -29,6 +29,14 @@ void to_json(Json& j, const AtlasFigures& figures);
 
 using TexelPoint = std::array<int, 2>;
 
+// p turned by turns * 90 degrees counter-clockwise about the origin (texel or grid coordinates).
+template <class T>
+std::array<T, 2> quarter_turns(const std::array<T, 2>& p, int turns) {
+  std::array<T, 2> r = p;
+  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
+  return r;
+}
+
 // Where a chart goes: the texel its turned bounding box starts at (the chart itself gutter / 2
 // texels further), and its quarter turns.
 struct ChartPlacement {

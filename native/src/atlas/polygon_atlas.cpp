@@ -156,12 +156,6 @@ std::vector<int> grow_charts(const CornerFaces& faces, const std::vector<int>& a
   return chart;
 }
 
-CornerUv rotate(const CornerUv& p, int turns) {
-  CornerUv r = p;
-  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
-  return r;
-}
-
 // Per chart, the grid point below-left of its corners (lo) and its size in cells.
 void chart_boxes(const CornerFaces& faces, const std::vector<int>& chart, int count, std::vector<TexelPoint>* lo,
                  std::vector<TexelPoint>* size) {
@@ -218,7 +212,7 @@ PolygonAtlas build_polygon_atlas(const PolygonSoup& soup, const std::vector<Corn
   for (size_t c = 0; c < grid_uv.size(); ++c) {
     const int chart = atlas.face_chart[faces.corner_face[c]];
     const ChartPlacement& p = packing.placements[chart];
-    const CornerUv r = rotate({grid_uv[c][0] - lo[chart][0], grid_uv[c][1] - lo[chart][1]}, p.turns);
+    const CornerUv r = quarter_turns(CornerUv{grid_uv[c][0] - lo[chart][0], grid_uv[c][1] - lo[chart][1]}, p.turns);
     const CornerUv box_lo = {p.turns == 1 ? -double(size[chart][1]) : 0.0, 0.0};  // the turned box's lowest corner
     for (int d = 0; d < 2; ++d)
       atlas.corner_uv[c][d] = (k * (r[d] - box_lo[d]) + p.offset[d] + packing.gutter / 2) / (d == 0 ? W : H);

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
-#include <functional>
 #include <map>
 #include <string>
 #include <tuple>
@@ -172,11 +171,7 @@ void grow_chart(const QuadMesh& quads, const std::vector<int>& across, const std
   }
 }
 
-Point rotate(const Point& p, int turns) {  // by turns * 90 degrees, counter-clockwise
-  Point r = p;
-  for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
-  return r;
-}
+Point rotate(const Point& p, int turns) { return quarter_turns(p, turns); }
 
 // A chart's cells and the one place of each vertex, for trying a union with another chart.
 struct ChartShape {

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "atlas/corner_faces.h"
+#include "atlas/packing.h"
 #include "core/error.h"
 #include "core/union_find.h"
 
@@ -24,8 +25,7 @@ struct Transition {
   int turns = 0;
   double shift[2] = {0, 0};
   Uv apply(const Uv& p) const {
-    Uv r = p;
-    for (int t = 0; t < turns; ++t) r = {-r[1], r[0]};
+    const Uv r = quarter_turns(p, turns);
     return {r[0] + shift[0], r[1] + shift[1]};
   }
 };
