@@ -454,7 +454,7 @@ TEST(CApiMeshes, PartsWhoseLayoutFailsAreRescuedOrKeptWithoutMap) {
   qgp_session_free(s);
 }
 
-// The grid-UV job with "fallback_uv_map": on joint at 500 quads, whose global map stays flipped,
+// The grid-UV job with "fallback_uv_map": on joint at 300 quads, whose global map stays flipped,
 // the map comes as a refined mesh without a flipped uv triangle; on the torus, whose global map is
 // fine, on the intake triangles themselves.
 TEST(CApiMeshes, UvMeshIsRefinedWhereTheGlobalMapStaysFlipped) {
@@ -462,7 +462,7 @@ TEST(CApiMeshes, UvMeshIsRefinedWhereTheGlobalMapStaysFlipped) {
     SCOPED_TRACE(name);
     qgp_session* s = nullptr;
     ASSERT_EQ(qgp_session_create_from_file((std::string(QGP_MESH_DIR) + "/" + name).c_str(), &s), QGP_OK);
-    ASSERT_EQ(qgp_session_set_option(s, "target_faces", 500), QGP_OK);
+    ASSERT_EQ(qgp_session_set_option(s, "target_faces", 300), QGP_OK);
     ASSERT_EQ(qgp_session_set_option(s, "fallback_uv_map", 1), QGP_OK);
     ASSERT_EQ(qgp_job_start(s, QGP_JOB_GRID_UV), QGP_OK);
     int state = -1;

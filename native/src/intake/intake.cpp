@@ -250,6 +250,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
                                             std::to_string(input.num_faces()) +
                                             " were removed): no surface is left to remesh");
   progress.update(0.7);
+  sort_triangles_canonically(soup);  // after the repairs: the parts set aside keep their input order
   build_result_mesh(soup, result);
   classify_components(result);
   progress.update(1.0);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <numeric>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -624,6 +625,24 @@ int remove_unreferenced_vertices(TriangleSoup& soup, RepairLocations* where) {
   for (auto& t : soup.triangles)
     for (int& v : t) v = remap[v];
   return removed;
+}
+
+void sort_triangles_canonically(TriangleSoup& soup) {
+  const size_t n = soup.triangles.size();
+  for (std::array<int, 3>& t : soup.triangles) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return std::tie(soup.triangles[a], soup.input_face[a]) < std::tie(soup.triangles[b], soup.input_face[b]);
+  });
+  std::vector<std::array<int, 3>> triangles(n);
+  std::vector<int> input_face(n);
+  for (size_t i = 0; i < n; ++i) {
+    triangles[i] = soup.triangles[order[i]];
+    input_face[i] = soup.input_face[order[i]];
+  }
+  soup.triangles = std::move(triangles);
+  soup.input_face = std::move(input_face);
 }
 
 int remove_duplicate_faces(TriangleSoup& soup, RepairLocations* where) {

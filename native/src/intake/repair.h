@@ -35,6 +35,13 @@ void validate_soup(const PolygonSoup& soup);
 // Triangulates polygons (ear clipping in their best-fit plane). Returns #polygons split.
 int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out, RepairLocations* where = nullptr);
 
+// Puts the triangles in a canonical order: each starts at its lowest vertex (orientation kept) and
+// they are sorted by their vertices, then by input face. Every later step depends on the order of
+// the triangles, and the same surface comes in other orders (Blender gives a new UV sphere's
+// polygons and loops in another order each run; exporters differ): with this, the same vertices
+// and triangles give the same quads whatever their order. run_intake applies it after the repairs.
+void sort_triangles_canonically(TriangleSoup& soup);
+
 // Removes vertices no triangle references. Returns #removed.
 int remove_unreferenced_vertices(TriangleSoup& soup, RepairLocations* where = nullptr);
 
