@@ -94,10 +94,7 @@ class SourceMesh:
         else:
             evaluated_obj, mesh = None, obj.data
         try:
-            self.vertices, self.triangles, self.triangle_loops = meshdata.mesh_arrays(mesh)
-            polys = np.empty(len(mesh.loop_triangles), np.int32)
-            mesh.loop_triangles.foreach_get("polygon_index", polys)
-            self.triangle_polygon = polys
+            self.vertices, self.triangles, self.triangle_loops, self.triangle_polygon = meshdata.mesh_arrays(mesh)
             materials = np.zeros(len(mesh.polygons), np.int32)
             mesh.polygons.foreach_get("material_index", materials)
             self.polygon_material = materials

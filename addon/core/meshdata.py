@@ -7,18 +7,51 @@ import numpy as np
 
 
 def mesh_arrays(mesh):
-    """Vertices (n,3) float64, triangles (m,3) int32 and the loop of each triangle corner (m,3)
-    int32, from a bpy Mesh (triangulated through its loop triangles; n-gons stay intact)."""
+    """Vertices (n,3) float64, triangles (m,3) int32, the loop of each triangle corner (m,3) int32
+    and the polygon of each triangle (m,) int32, from a bpy Mesh: its quads split by split_quads,
+    other polygons through Blender's loop triangles (n-gons stay intact); triangles by polygon."""
     mesh.calc_loop_triangles()
     n = len(mesh.vertices)
     co = np.empty(3 * n, np.float32)
     mesh.vertices.foreach_get("co", co)
+    vertices = co.reshape(-1, 3).astype(np.float64)
     m = len(mesh.loop_triangles)
-    tris = np.empty(3 * m, np.int32)
+    tris, loops, polys = np.empty(3 * m, np.int32), np.empty(3 * m, np.int32), np.empty(m, np.int32)
     mesh.loop_triangles.foreach_get("vertices", tris)
-    loops = np.empty(3 * m, np.int32)
     mesh.loop_triangles.foreach_get("loops", loops)
-    return co.reshape(-1, 3).astype(np.float64), tris.reshape(-1, 3), loops.reshape(-1, 3)
+    mesh.loop_triangles.foreach_get("polygon_index", polys)
+    sizes, starts = np.empty(len(mesh.polygons), np.int32), np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    mesh.polygons.foreach_get("loop_start", starts)
+    loop_vertex = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", loop_vertex)
+    quads = np.flatnonzero(sizes == 4)
+    quad_loops = (starts[quads][:, None] + np.arange(4)).astype(np.int32)
+    quad_tris, quad_tri_loops = split_quads(vertices, loop_vertex[quad_loops], quad_loops)
+    other = sizes[polys] != 4
+    triangles = np.concatenate([tris.reshape(-1, 3)[other], quad_tris])
+    triangle_loops = np.concatenate([loops.reshape(-1, 3)[other], quad_tri_loops])
+    triangle_polygon = np.concatenate([polys[other], np.repeat(quads, 2)]).astype(np.int32)
+    order = np.argsort(triangle_polygon, kind="stable")
+    return vertices, triangles[order], triangle_loops[order], triangle_polygon[order]
+
+
+def split_quads(vertices, quad_vertices, quad_loops):
+    """Two triangles (2k,3) and their loops (2k,3) per quad (k,4): along the diagonal from the quad's
+    lowest vertex unless its two triangles face apart (a concave quad), else along the other one.
+    Blender splits a quad from its first loop, and gives a new mesh's loops from another start from
+    run to run (a UV sphere's): the same quads must give the same triangles, whatever their start."""
+    first = np.argmin(quad_vertices, axis=1)
+    corners = (first[:, None] + np.arange(4)) % 4
+    v = np.take_along_axis(quad_vertices, corners, axis=1)
+    loops = np.take_along_axis(quad_loops, corners, axis=1)
+    p = vertices[v]
+    n1 = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n2 = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])
+    from_lowest = np.einsum("ij,ij->i", n1, n2) >= 0
+    pick = np.where(from_lowest[:, None, None], [[0, 1, 2], [0, 2, 3]], [[1, 2, 3], [1, 3, 0]])  # (k,2,3)
+    rows = np.arange(len(v))[:, None, None]
+    return v[rows, pick].reshape(-1, 3).astype(np.int32), loops[rows, pick].reshape(-1, 3).astype(np.int32)
 
 
 def edge_vertex_pairs(mesh, flags):

@@ -105,6 +105,29 @@ def test_carried():
     check(not attributes.is_carried("Map2", "POINT", "FLOAT2", uv_names=("Map2",)), "a UV map is not carried")
 
 
+def test_split_quads():
+    """The same quads from any starting loop give the same triangles (Blender gives a new mesh's loops
+    from another start from run to run); a concave quad is split along its inner diagonal; each
+    triangle keeps the quad's orientation and its loops follow its corners."""
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0],
+                         [3, 0, 0], [5, 1, 0], [3, 2, 0], [3.5, 1, 0]], float)
+    quads = np.array([[0, 1, 2, 3], [1, 4, 5, 2], [9, 6, 7, 8]], np.int32)  # the last one a dart
+    loops = np.arange(12, dtype=np.int32).reshape(-1, 3 + 1)
+    results = []
+    for start in range(4):
+        turn = (np.array([start, 3 - start, start // 2])[:, None] + np.arange(4)) % 4
+        tris, tri_loops = meshdata.split_quads(vertices, np.take_along_axis(quads, turn, 1),
+                                               np.take_along_axis(loops, turn, 1))
+        results.append((tris, tri_loops))
+    check(all(np.array_equal(t, results[0][0]) and np.array_equal(lp, results[0][1]) for t, lp in results),
+          "the same quads from any start give the same triangles")
+    tris, tri_loops = results[0]
+    check(np.array_equal(tris, quads.reshape(-1)[tri_loops]), "the loops follow the triangles' corners")
+    normals = np.cross(vertices[tris[:, 1]] - vertices[tris[:, 0]], vertices[tris[:, 2]] - vertices[tris[:, 0]])
+    check(np.all(normals[:, 2] > 0), "every triangle faces as its quad does (the dart split inside)")
+    check(sorted(map(sorted, tris[4:].tolist())) == [[6, 7, 9], [7, 8, 9]], "the dart along its inner diagonal")
+
+
 def test_speed():
     rng = np.random.default_rng(1)
     n = 200000
@@ -122,6 +145,7 @@ def main():
     test_barycentric()
     test_values()
     test_carried()
+    test_split_quads()
     test_speed()
     print(f"{len(failures)} failure(s)" if failures else "attributes: OK")
     return 1 if failures else 0

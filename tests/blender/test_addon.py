@@ -5,6 +5,7 @@ import contextlib
 import io
 import math
 import os
+import random
 import sys
 import tempfile
 import time
@@ -400,6 +401,31 @@ def test_symmetry():
               f"{error:.1e} of the diagonal, welded")
 
 
+def test_polygon_order():
+    """Blender gives a new mesh's polygons and loops in another order from run to run (a UV sphere's
+    do): the same vertices and polygons in any order, each from any corner, give the same quads."""
+    reset_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32)
+    ellipsoid = bpy.context.active_object
+    ellipsoid.scale = (1, 1, 3)
+    bpy.ops.object.transform_apply(scale=True)
+    vertices = [tuple(v.co) for v in ellipsoid.data.vertices]
+    polygons = [list(p.vertices) for p in ellipsoid.data.polygons]
+    rng = random.Random(7)
+    rng.shuffle(polygons)
+    polygons = [p[k:] + p[:k] for p, k in ((p, rng.randrange(len(p))) for p in polygons)]
+    mesh = bpy.data.meshes.new("shuffled")
+    mesh.from_pydata(vertices, [], polygons)
+    shuffled = bpy.data.objects.new("shuffled", mesh)
+    bpy.context.collection.objects.link(shuffled)
+    results = []
+    for source in (ellipsoid, shuffled):
+        quad = run_quad_remesh(source, target_faces=800, keep_source_visible=True)
+        results.append(([tuple(v.co) for v in quad.data.vertices], [tuple(p.vertices) for p in quad.data.polygons]))
+    assert results[0] == results[1], [(len(v), len(p)) for v, p in results]
+    print(f"polygon order: the same {len(results[0][1])} quads from the ellipsoid and its shuffled copy")
+
+
 def test_density():
     """Adaptive Size (0 by default) and the painted density (Density Group / Density Colour, none by
     default): a sphere stretched to an ellipsoid gets shorter edges at its tips with Adaptive Size 1
@@ -613,12 +639,12 @@ def test_grid_uv_seams_off():
 
 
 def test_grid_uv_flip_free_copy(binding):
-    """joint at 500 quads: its global map keeps flipped triangles, so Flip-Free Copy writes a new
+    """joint at 300 quads: its global map keeps flipped triangles, so Flip-Free Copy writes a new
     object (the layout's edges inserted) whose map has none; without it, the source gets the map."""
     reset_scene()
     joint = import_mesh(binding, "joint.obj")
     before = [tuple(v.co) for v in joint.data.vertices]
-    result = bpy.ops.object.qgp_grid_uv(target_faces=500, quads_per_unit=2.0)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=300, quads_per_unit=2.0)
     assert result == {"FINISHED"}, result
     copy = bpy.data.objects.get("joint_grid_uv")
     assert copy is not None, [o.name for o in bpy.data.objects]
@@ -642,13 +668,13 @@ def test_grid_uv_flip_free_copy(binding):
     assert not seam_edges(mesh), "Mark Seams is off"
     assert copy["qgp"]["refined_components"] >= 1 and copy["qgp"]["seams"] == 0, copy["qgp"].to_dict()
     select_only(joint)
-    result = bpy.ops.object.qgp_grid_uv(target_faces=500, flip_free_copy=False)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=300, flip_free_copy=False)
     assert result == {"FINISHED"}, result
     assert "QGP Grid" in joint.data.uv_layers and bpy.data.objects.get("joint_grid_uv.001") is None
     # Mark Seams with a Flip-Free Copy: the copy's seams are its UV islands' inner boundaries; the
     # source keeps none.
     select_only(joint)
-    result = bpy.ops.object.qgp_grid_uv(target_faces=500, quads_per_unit=2.0, mark_seams=True)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=300, quads_per_unit=2.0, mark_seams=True)
     assert result == {"FINISHED"}, result
     copy = bpy.data.objects["joint_grid_uv.001"]
     seams = seam_edges(copy.data)
@@ -810,7 +836,7 @@ def main():
              (test_cancel_leaves_scene_unchanged, (binding,)), (test_worker_fault_leaves_blender_running, ()),
              (test_worker_start_failure_warns, ()), (test_select_faces, ()), (test_keep_source_visible, ()),
              (test_redo_reuses_session, ()), (test_guides, ()), (test_attributes_kept, ()), (test_symmetry, ()),
-             (test_density, ()), (test_panel_draws, ()),
+             (test_density, ()), (test_polygon_order, ()), (test_panel_draws, ()),
              (test_show_layout, ()),
              (test_quad_remesh, (binding,)), (test_grid_uv, (binding,)), (test_grid_uv_seams_off, ()),
              (test_grid_uv_flip_free_copy, (binding,)), (test_undo_restores_scene, ()), (test_batch, ()),

@@ -18,7 +18,7 @@ def main():
     obj = bpy.context.active_object
     obj.modifiers.new("subdivide", "SUBSURF").levels = 1
     mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).to_mesh()
-    vertices, triangles, _ = meshdata.mesh_arrays(mesh)
+    vertices, triangles, _, _ = meshdata.mesh_arrays(mesh)
     print("library", binding.version(), "suzanne", len(vertices), "vertices", len(triangles), "triangles")
     with binding.Session(vertices, triangles) as session:
         session.run(binding.JOB_INTAKE)
