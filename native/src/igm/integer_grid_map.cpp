@@ -453,6 +453,7 @@ IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField
   solve_options_.penalty_weight = options.penalty_weight;
   solve_options_.max_repair_rounds = options.max_repair_rounds;
   solve_options_.count_stagnation_rounds = options.count_stagnation_rounds;
+  solve_options_.halving_rounds = options.halving_rounds;
   solve_options_.relinearization_rounds = options.relinearization_rounds;
 }
 
@@ -544,6 +545,10 @@ ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized
   solve_options_.progress_end = end;
   ParametrizationSolution solution = problem_.solve(solve_options_, progress_);
   count_solves(solution);
+  stats_.flipped_initial = solution.stats.flipped_initial;
+  stats_.faces = mesh_.num_faces();
+  stats_.repair_bad_faces = solution.stats.bad_after_round;
+  stats_.repair_seconds = solution.stats.seconds_of_round;
   stats_.max_constraint_violation = 0;
   for (const IgmRow& r : rows_) {
     double value = -r.rhs;

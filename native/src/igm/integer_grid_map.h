@@ -41,6 +41,7 @@ struct IgmOptions {
   int max_penalty_rounds = 8;       // penalty solves of the re-linearized attempt
   int max_repair_rounds = 24;       // Ipopt repair rounds per solve
   int count_stagnation_rounds = 0;  // see ParametrizationSolveOptions
+  int halving_rounds = 0;           // see ParametrizationSolveOptions
   int relinearization_rounds = 1;   // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;           // of the exact result
 };
@@ -72,6 +73,10 @@ struct IgmStats {
                                              // transition translation / feature isoline from an integer
   double penalty_integer_residual = 0;       // the same after the penalty phase (<= 1e-4 expected)
   double max_constraint_violation = 0;       // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
+  int flipped_initial = 0;                   // flipped triangles of the hard solve's equality-only optimum
+  int faces = 0;                             // triangles of the component
+  std::vector<int> repair_bad_faces;         // the hard solve's bad faces after each repair round
+  std::vector<double> repair_seconds;        // and the time of each round
   IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
   bool fallback_used = false;                // made by the all-faces attempt
   std::string path;                          // the policy's account of the attempts (pipeline/policy.h)
@@ -185,6 +190,7 @@ int64_t exact_parametric_area(const ExactParametrization& param, bool* integral)
 QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, max_integer_residual, fallback_used,
                 penalty_iterations, seconds, path, penalty_integer_residual, constraints, max_constraint_violation,
                 unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, seconds_solve, seconds_sanitize,
-                flipped_before_untangle, degenerate_before_untangle, untangled_vertices, winding_defects)
+                flipped_before_untangle, degenerate_before_untangle, untangled_vertices, winding_defects,
+                flipped_initial, faces, repair_bad_faces, repair_seconds)
 
 }  // namespace qgp

@@ -278,6 +278,7 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   if (!escalate) {
     options.max_repair_rounds = kRepairRoundsWithoutEscalation;
     options.count_stagnation_rounds = kStagnantRoundsWithoutEscalation;
+    options.halving_rounds = kHalvingRoundsWithoutEscalation;
   }
   IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
                               state.traced->tmesh, state.quantization->result, options, progress);

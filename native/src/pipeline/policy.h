@@ -85,9 +85,14 @@ bool escalates_integer_grid_map(Job job);
 // kStagnantRoundsWithoutEscalation rounds (one turn) without fewer bad triangles: on 18 shared
 // meshes, maps that became regular took at most 9 Ipopt solves in all, while maps that stayed
 // flipped (their quads then come from the layout) spent up to 24 rounds, most over their whole
-// mesh: minutes on dragon and cycloidal.
+// mesh: minutes on dragon and cycloidal. It also stops once the bad triangles have not halved over
+// kHalvingRoundsWithoutEscalation rounds: at 2 000 quads on the 27 shared meshes (2026-11-28), the
+// maps that became regular halved them every 4 rounds or faster (fertility: 17 17 17 17 1 0), while
+// those that stayed flipped crept down to a plateau (dragon-genus1: 600 341 66 59 55 54 54 ...,
+// 5-9 s a round; cycloidal's largest part: 229 131 95 91 76 76 74 78 68 66 66 66).
 constexpr int kRepairRoundsWithoutEscalation = 12;
 constexpr int kStagnantRoundsWithoutEscalation = 4;
+constexpr int kHalvingRoundsWithoutEscalation = 4;
 // True when a stored map serves a job that does (escalate) or does not escalate.
 bool integer_grid_map_serves(const IgmResult& map, bool escalate);
 

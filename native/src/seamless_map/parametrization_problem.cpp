@@ -611,6 +611,9 @@ class ParametrizationProblem::Solver {
   void local_repair(int max_rounds);
   // One local repair round; false when the repair should stop.
   bool repair_round(int round, RepairTrack& track);
+  bool repair_step(int round, RepairTrack& track);  // one round; false: stop
+  // options_.halving_rounds > 0 and the bad faces have not halved over that many rounds.
+  bool stops_halving() const;
   // Constrains faces that went bad outside the constrained set; true when `next` is rejected.
   bool reject_escaped(const Census& next);
   // Faces still bad get wider rings; the region and the constrained set grow accordingly.
@@ -995,6 +998,14 @@ void ParametrizationProblem::Solver::local_repair(int max_rounds) {
 }
 
 bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track) {
+  Timer timer;
+  const bool more = repair_step(round, track);
+  st_.bad_after_round.push_back(current_.bad());
+  st_.seconds_of_round.push_back(timer.seconds());
+  return more;
+}
+
+bool ParametrizationProblem::Solver::repair_step(int round, RepairTrack& track) {
   ++st_.repair_rounds;
   QPResult::Status status;
   const double t0 = 0.3 + 0.5 * std::min(st_.repair_rounds - 1, rounds_ - 1) / rounds_;
@@ -1025,8 +1036,16 @@ bool ParametrizationProblem::Solver::repair_round(int round, RepairTrack& track)
   if (round - track.best_round >= options_.stagnation_rounds) return false;  // no new best for a while
   if (options_.count_stagnation_rounds > 0 && round - track.fewer_bad_round >= options_.count_stagnation_rounds)
     return false;  // no fewer bad faces for a while
+  if (stops_halving()) return false;
   widen_rings();
   return true;
+}
+
+bool ParametrizationProblem::Solver::stops_halving() const {
+  const int window = options_.halving_rounds;
+  const std::vector<int>& before = st_.bad_after_round;  // the rounds before this one
+  if (window <= 0 || static_cast<int>(before.size()) < window) return false;
+  return 2 * current_.bad() > before[before.size() - window];
 }
 
 bool ParametrizationProblem::Solver::reject_escaped(const Census& next) {

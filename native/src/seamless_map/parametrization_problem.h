@@ -65,6 +65,9 @@ struct ParametrizationSolveOptions {
   int count_stagnation_rounds = 0;             // > 0: also after this many rounds without fewer bad faces
                                                // (for callers with a fallback: a pose only less bad
                                                // rarely becomes regular later)
+  int halving_rounds = 0;                      // > 0: also once the bad faces have not halved over the
+                                               // last this many rounds (a pose that creeps down to a
+                                               // plateau of bad faces)
   bool winding_repair = true;                  // with cone angles: one-rings wound a full turn off their cone are
                                                // bad faces; when the local repair leaves bad faces, one global
                                                // solve in the field's frame, then max_repair_rounds / 2 more rounds
@@ -87,6 +90,8 @@ struct ParametrizationSolveStats {
   double constraint_violation = 0;  // max |Cz - b| of the caller's linear constraints
   int ipopt_solves = 0, ipopt_iterations = 0;
   int repair_rounds = 0, relinearizations = 0;
+  std::vector<int> bad_after_round;       // bad faces of the kept pose after each repair round
+  std::vector<double> seconds_of_round;   // time of each repair round
   int field_frame_solves = 0;  // global solves with every face in its field-frame sectors
   int max_region_faces = 0, max_qp_variables = 0;
   int non_integer_pivots = 0, redundant_constraints = 0, inconsistent_constraints = 0;
