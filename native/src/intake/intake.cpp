@@ -240,6 +240,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
   run_repair(result, "unreferenced_vertices",
              [&](RepairLocations* w) { return remove_unreferenced_vertices(soup, w); });
   weld(soup, options, result);
+  sort_triangles_canonically(soup);  // the repairs below then do not depend on the input's face order
   run_repair(result, "duplicate_faces", [&](RepairLocations* w) { return remove_duplicate_faces(soup, w); });
   progress.update(0.2);
   repair_nonmanifold_edges(soup, options, result);
@@ -250,7 +251,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
                                             std::to_string(input.num_faces()) +
                                             " were removed): no surface is left to remesh");
   progress.update(0.7);
-  sort_triangles_canonically(soup);  // after the repairs: the parts set aside keep their input order
+  sort_triangles_canonically(soup);  // again: the repairs split vertices and reorient triangles
   build_result_mesh(soup, result);
   classify_components(result);
   progress.update(1.0);

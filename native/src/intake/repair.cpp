@@ -74,7 +74,11 @@ double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 void triangulate_polygon(const PolygonSoup& soup, int f, const std::unordered_set<uint64_t>& existing,
                          std::vector<std::array<int, 3>>& out) {
   const int n = soup.face_size(f);
-  const int* idx = &soup.face_vertices[soup.face_start[f]];
+  // From the polygon's lowest vertex: ties between diagonals then do not depend on where the
+  // file's corner list starts.
+  std::vector<int> corners(&soup.face_vertices[soup.face_start[f]], &soup.face_vertices[soup.face_start[f]] + n);
+  std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+  const int* idx = corners.data();
   Vec3 normal = Vec3::Zero();
   for (int i = 0; i < n; ++i) {
     const Vec3& p = soup.positions[idx[i]];
