@@ -3,6 +3,7 @@
     blender -b --factory-startup --python bench/compare_quadriflow.py -- \
         [--meshes NAME[,NAME...]] [--targets 2000,8000] [--out bench/results] [--mesh-dir DIR]
         [--sharp-angle 60] [--timeout 900] [--tools qgp,quadriflow] [--save-meshes]
+        [--sculpts spot.obj:3,spot.obj:4]
 
 For every mesh and target quad count both tools run on a fresh copy of the input (the order of the two
 alternates from case to case), then the SAME native measurement (binding.measure_polygon_mesh, see
@@ -10,6 +11,13 @@ docs/report.md) is applied to both results against the input triangles. Writes
 OUT/compare.csv (one row per mesh x target x tool), OUT/compare.json and, with --save-meshes,
 OUT/meshes/<mesh>_<target>_<tool>.obj for bench/render.py. Plots and the markdown table are made
 from the CSV by bench/plots.py (system Python with matplotlib).
+
+--sculpts BASE:LEVELS,...: dense sculpt-like inputs made here, as a user makes them in Blender: BASE with
+a Catmull-Clark Subdivision Surface modifier at LEVELS, then a Displace modifier with a Clouds noise
+texture (size 0.05, strength 0.2 % of the bounding-box diagonal along the normals), applied and
+triangulated (spot.obj:3 about 0.56 M triangles, spot.obj:4 about 2.2 M). They are named
+sculpt-BASE-LLEVELS in the table, category "sculpt", and run after the meshes. Each qgp row records
+the native pipeline's peak memory (its report's peak_memory_mb).
 
 Status per run: ok (a mesh came back), refused (the tool reported an error; message kept),
 unchanged (the tool returned without error but left the mesh as it was: QuadriFlow does this when
@@ -46,13 +54,14 @@ COLUMNS = ["mesh", "category", "input_triangles", "target", "tool", "status", "m
            "quads_per_target", "fewest_quads", "hausdorff", "hausdorff_result_to_input", "hausdorff_input_to_result",
            "mean_angle_deviation_deg",
            "p95_angle_deviation_deg", "min_scaled_jacobian", "sharp_edges", "sharp_edge_coverage",
-           "non_manifold_edges", "stage_seconds"]
+           "non_manifold_edges", "stage_seconds", "peak_memory_mb"]
 
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     ap = argparse.ArgumentParser(prog="blender -b --python bench/compare_quadriflow.py --")
-    ap.add_argument("--meshes", default="", help="comma-separated file names in --mesh-dir (default: all manifold)")
+    ap.add_argument("--meshes", default="",
+                    help="comma-separated file names in --mesh-dir (default: all manifold; none: only --sculpts)")
     ap.add_argument("--targets", default="2000,8000", help="comma-separated target quad counts")
     ap.add_argument("--mesh-dir",
                     default=os.environ.get("QGP_MESHES", os.path.join(os.path.dirname(REPO), "shared", "meshes")))
@@ -64,6 +73,8 @@ def parse_args():
     ap.add_argument("--tools", default="qgp,quadriflow")
     ap.add_argument("--quantizer", default="", help="Quantized Retopo quantizer (greedy / round); default: the "
                                                     "library's default")
+    ap.add_argument("--sculpts", default="", help="comma-separated BASE:LEVELS sculpts to generate and run "
+                                                  "(e.g. spot.obj:3,spot.obj:4)")
     ap.add_argument("--save-meshes", action="store_true", help="write every result as OBJ under OUT/meshes/")
     ap.add_argument("--resume", action="store_true",
                     help="keep the rows of OUT/compare.csv and run only the missing cases; a case that was "
@@ -109,6 +120,35 @@ def read_input(binding, path):
         polygons.append(poly)
         triangles.extend([poly[0], poly[i], poly[i + 1]] for i in range(1, n - 1))
     return vertices, polygons, np.asarray(triangles, np.int32).reshape(-1, 3)
+
+
+def sculpt_input(binding, mesh_dir, base, levels):
+    """(vertices, polygons, triangles) of BASE subdivided LEVELS times and displaced by a small noise."""
+    vertices, polygons, _ = read_input(binding, os.path.join(mesh_dir, base))
+    obj = new_object("sculpt_source", vertices, polygons)
+    diagonal = float(np.linalg.norm(np.ptp(np.asarray(vertices), axis=0)))
+    subdivision = obj.modifiers.new("subdivision", "SUBSURF")
+    subdivision.levels = subdivision.render_levels = levels
+    noise = bpy.data.textures.new("sculpt_noise", "CLOUDS")
+    noise.noise_scale = 0.05 * diagonal
+    displace = obj.modifiers.new("displace", "DISPLACE")
+    displace.texture = noise
+    displace.strength = 0.002 * diagonal
+    displace.mid_level = 0.5
+    obj.modifiers.new("triangulate", "TRIANGULATE")
+    evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = bpy.data.meshes.new_from_object(evaluated)
+    v, sizes, corners = mesh_polygons(mesh)
+    triangles = corners.reshape(-1, 3)
+    assert (sizes == 3).all()
+    bpy.data.meshes.remove(mesh)
+    bpy.data.textures.remove(noise)
+    remove_object(obj)
+    return v, triangles.tolist(), triangles
+
+
+def sculpt_name(base, levels):
+    return f"sculpt-{os.path.splitext(base)[0]}-L{levels}"
 
 
 def remove_object(obj):
@@ -245,6 +285,7 @@ def run_case(addon, binding, args, name, category, data, target, tool):
         row["stage_seconds"] = ";".join(f"{k}={v:.3f}" for k, v in stages.items() if isinstance(v, (int, float)))
         # The fewest quads the layout allows, when the report names it (the count asked is below it).
         row["fewest_quads"] = report.get("quantization", {}).get("count", {}).get("fewest_quads", "")
+        row["peak_memory_mb"] = report.get("peak_memory_mb", "")
     else:
         status, message, result = run_quadriflow(source, target)
     row["seconds"] = round(time.perf_counter() - start, 3)
@@ -274,7 +315,13 @@ def run_case(addon, binding, args, name, category, data, target, tool):
 
 def main():
     args = parse_args()
-    names = [m for m in args.meshes.split(",") if m] or list(MANIFOLD_MESHES)
+    names = [m for m in args.meshes.split(",") if m and m != "none"] or (
+        [] if args.meshes == "none" else list(MANIFOLD_MESHES))
+    sculpts = {}
+    for spec in filter(None, args.sculpts.split(",")):
+        base, levels = spec.rsplit(":", 1)
+        sculpts[sculpt_name(base, int(levels))] = (base, int(levels))
+    names += list(sculpts)
     targets = [int(t) for t in args.targets.split(",") if t]
     tools = [t for t in args.tools.split(",") if t]
     os.makedirs(os.path.join(args.out, "meshes") if args.save_meshes else args.out, exist_ok=True)
@@ -318,9 +365,11 @@ def main():
                 for tool in order:
                     if (name, str(target), tool) in done:
                         continue
-                    if data is None:
+                    if data is None and name in sculpts:
+                        data = sculpt_input(binding, args.mesh_dir, *sculpts[name])
+                    elif data is None:
                         data = read_input(binding, os.path.join(args.mesh_dir, name))
-                    category = MANIFOLD_MESHES.get(name, "other")
+                    category = "sculpt" if name in sculpts else MANIFOLD_MESHES.get(name, "other")
                     with open(pending_path, "w") as p:
                         json.dump({"mesh": name, "category": category, "input_triangles": len(data[2]),
                                    "target": target, "tool": tool}, p)

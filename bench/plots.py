@@ -127,6 +127,39 @@ def median(values):
     return values[n // 2] if n % 2 else 0.5 * (values[n // 2 - 1] + values[n // 2])
 
 
+def time_ratios(rows):
+    """Per mesh and target where both tools ran: (mesh, triangles, target, qgp s, QuadriFlow s, ratio, qgp peak MB,
+    statuses); the ratio is qgp's time over QuadriFlow's, only where both gave a mesh."""
+    runs = defaultdict(dict)
+    for r in rows:
+        runs[(r["mesh"], r["target"])][r["tool"]] = r
+    out = []
+    for (mesh, target), by_tool in runs.items():
+        q, f = by_tool.get("qgp"), by_tool.get("quadriflow")
+        if q is None or f is None:
+            continue
+        qs, fs = number(q["seconds"]), number(f["seconds"])
+        both_ok = q["status"] == "ok" and f["status"] == "ok" and qs is not None and fs
+        out.append((mesh, q["input_triangles"], target, qs, fs, qs / fs if both_ok else None,
+                    number(q.get("peak_memory_mb")), f"{q['status']} / {f['status']}"))
+    return out
+
+
+def ratio_markdown(rows):
+    """The time ratio table: one line per mesh and target, then how many are slower and the median ratio."""
+    ratios = time_ratios(rows)
+    lines = ["| mesh | triangles | target | Quantized Retopo s | QuadriFlow s | ratio | Quantized Retopo peak MB "
+             "| status |", "|---|---:|---:|---:|---:|---:|---:|---|"]
+    for mesh, triangles, target, qs, fs, ratio, peak, status in ratios:
+        lines.append(f"| {mesh} | {triangles} | {target} | {fmt(qs, '.2f')} | {fmt(fs, '.2f')} | "
+                     f"{fmt(ratio, '.2f')} | {fmt(peak, '.0f')} | {status} |")
+    compared = [r[5] for r in ratios if r[5] is not None]
+    slower = sum(r > 1 for r in compared)
+    lines += ["", f"Quantized Retopo slower than QuadriFlow on {slower} of {len(compared)} runs where both gave a "
+              f"mesh; median ratio {fmt(median(compared), '.2f')}."]
+    return "\n".join(lines) + "\n"
+
+
 def compare_summary(rows):
     lines = ["| tool | runs | ok | refused | unchanged | timeout | crashed | χ kept (of ok) | count kept (of ok) "
              "| flipped quads total | median time s | median Hausdorff % | median p95 angle ° | median min SJ |",
@@ -284,7 +317,8 @@ def update_doc(doc, results, images, compare, scaling):
         parts += [f"### Comparison ({len({r['mesh'] for r in compare})} meshes, targets "
                   f"{', '.join(sorted({r['target'] for r in compare}, key=int))} quads; Blender "
                   f"{meta.get('blender', '?')}, Quantized Retopo {meta.get('qgp', '?')})", "",
-                  compare_summary(compare), "Per run:", "", compare_markdown(compare)]
+                  compare_summary(compare), "Time against QuadriFlow (ratio: Quantized Retopo's time over "
+                  "QuadriFlow's):", "", ratio_markdown(compare), "Per run:", "", compare_markdown(compare)]
         for name in ("bench_compare_time.png", "bench_compare_quality.png"):
             if os.path.exists(os.path.join(images, name)):
                 parts.append(f"![{name}]({rel(os.path.join(images, name))})")
@@ -318,7 +352,9 @@ def main():
     compare = read_csv(os.path.join(args.results, "compare.csv"))
     if compare:
         with open(os.path.join(args.results, "compare.md"), "w") as f:
-            f.write("## Summary\n\n" + compare_summary(compare) + "\n## All runs\n\n" + compare_markdown(compare))
+            f.write("## Summary\n\n" + compare_summary(compare) + "\n## Time against QuadriFlow\n\n"
+                    + ratio_markdown(compare) + "\n## All runs\n\n" + compare_markdown(compare))
+        print(ratio_markdown(compare))
         for p in compare_plots(compare, args.images):
             print(f"plots: {p}")
     scaling = read_csv(os.path.join(args.results, "scaling.csv"))

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole benchmark in one command (docs/benchmark.md):
-#   1. Quantized Retopo vs Blender's QuadriFlow in one Blender process (bench/compare_quadriflow.py)
+#   1. Quantized Retopo vs Blender's QuadriFlow in one Blender process (bench/compare_quadriflow.py),
+#      on the shared meshes and on sculpts it generates (a shared mesh subdivided and displaced)
 #   2. scaling of the native pipeline against input size and target density (bench/scaling.py)
 #   3. tables + plots (bench/plots.py) and side-by-side renders (bench/render.py)
 #   4. every shared mesh through `qgp remesh` at 500 / 2 000 / 8 000 quads, each output checked
@@ -10,7 +11,7 @@
 #
 #   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render] [--skip-robustness]
 #   MESHES=spot.obj,fandisk.obj TARGETS=2000 ./scripts/bench.sh      # a subset
-#   (also MAX_TRIANGLES, DENSITIES, DENSITY_LEVEL, CASES, QGP_TIMEOUT, SCALING_TIMEOUT, QGP_MESHES,
+#   (also SCULPTS, MAX_TRIANGLES, DENSITIES, DENSITY_LEVEL, CASES, QGP_TIMEOUT, SCALING_TIMEOUT, QGP_MESHES,
 #   ROBUSTNESS_MESHES, ROBUSTNESS_TARGETS, ROBUSTNESS_TIMEOUT)
 # Defaults are the full run: every manifold mesh of ../shared/meshes at 2000 and 8000 quads and inputs
 # of about 5 000 to 1 000 000 triangles. --quick: 3 small meshes, 2000 quads, inputs up to ~100k triangles.
@@ -36,6 +37,7 @@ if [ "$QUICK" = 1 ]; then
   DENSITIES=${DENSITIES:-1000,2000,4000}
   DENSITY_LEVEL=${DENSITY_LEVEL:-1}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:2000}
+  SCULPTS=${SCULPTS-spot.obj:2}   # BASE:LEVELS; spot at 2 levels: 0.14 M triangles
   ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-spot.obj,truck.obj,teapot.obj}
   ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500}
 else
@@ -45,6 +47,7 @@ else
   DENSITIES=${DENSITIES:-500,1000,2000,4000,8000,16000,32000}
   DENSITY_LEVEL=${DENSITY_LEVEL:-2}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:8000}
+  SCULPTS=${SCULPTS-spot.obj:3,spot.obj:4}   # about 0.56 M and 2.2 M triangles
   ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-}   # empty: every mesh file
   ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500,2000,8000}
 fi
@@ -70,7 +73,7 @@ if [ "$DO_COMPARE" = 1 ]; then
   resume=""
   for attempt in 1 2 3 4 5 6; do
     blender -b --factory-startup --python-exit-code 1 --python bench/compare_quadriflow.py -- --mesh-dir "$MESH_DIR" \
-      --meshes "$MESHES" --targets "$TARGETS" --timeout "$QGP_TIMEOUT" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
+      --meshes "$MESHES" --sculpts "$SCULPTS" --targets "$TARGETS" --timeout "$QGP_TIMEOUT" --out "$RESULTS" --save-meshes $resume >>"$RESULTS/compare.log" 2>&1 &
     blender_pid=$!
     tail -n 0 -f "$RESULTS/compare.log" --pid=$blender_pid | grep --line-buffered -E '^(compare|Traceback|  File|[A-Za-z]*Error)' || true
     # A library can end Blender with status 0 (MUMPS after an internal error): the case file left
