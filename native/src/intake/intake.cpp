@@ -115,7 +115,11 @@ void set_aside_non_orientable(TriangleSoup& soup, const std::vector<int>& parts,
   std::vector<std::vector<int>> new_index(parts.size());  // per part: soup vertex -> part vertex
   std::vector<char> keep(soup.triangles.size(), 1);
   RepairLocations where;
-  for (size_t t = 0; t < soup.triangles.size(); ++t) {
+  std::vector<int> input_order(soup.triangles.size());  // the parts keep the input's face order
+  std::iota(input_order.begin(), input_order.end(), 0);
+  std::stable_sort(input_order.begin(), input_order.end(),
+                   [&](int a, int b) { return soup.input_face[a] < soup.input_face[b]; });
+  for (int t : input_order) {
     const int k = part_of[component[t]];
     if (k < 0) continue;
     keep[t] = 0;
@@ -226,6 +230,21 @@ void classify_components(IntakeResult& result) {
   }
 }
 
+// Starts each triangle of a part set aside at the corner nearest to its input face's first corner,
+// as the input had it (intake's canonical order starts it at its lowest vertex).
+void restore_input_corners(const PolygonSoup& input, NonOrientablePart& part) {
+  for (size_t t = 0; t < part.triangles.size(); ++t) {
+    std::array<int, 3>& triangle = part.triangles[t];
+    const Vec3& first = input.positions[input.face_vertices[input.face_start[part.input_face[t]]]];
+    int nearest = 0;
+    for (int j = 1; j < 3; ++j)
+      if ((part.positions[triangle[j]] - first).squaredNorm() <
+          (part.positions[triangle[nearest]] - first).squaredNorm())
+        nearest = j;
+    std::rotate(triangle.begin(), triangle.begin() + nearest, triangle.end());
+  }
+}
+
 }  // namespace
 
 IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, Progress& progress) {
@@ -252,6 +271,7 @@ IntakeResult run_intake(const PolygonSoup& input, const IntakeOptions& options, 
                                             " were removed): no surface is left to remesh");
   progress.update(0.7);
   sort_triangles_canonically(soup);  // again: the repairs split vertices and reorient triangles
+  for (NonOrientablePart& part : result.non_orientable_parts) restore_input_corners(input, part);
   build_result_mesh(soup, result);
   classify_components(result);
   progress.update(1.0);

@@ -40,7 +40,7 @@ int triangulate_polygons(const PolygonSoup& soup, TriangleSoup& out, RepairLocat
 // the triangles, and the same surface comes in other orders (Blender gives a new UV sphere's
 // polygons and loops in another order each run; exporters differ): with this, the same vertices
 // and triangles give the same quads whatever their order. run_intake applies it after welding
-// (so the repairs see one order) and again after the repairs.
+// (the repairs then see one order) and again after the repairs.
 void sort_triangles_canonically(TriangleSoup& soup);
 
 // Removes vertices no triangle references. Returns #removed.

@@ -609,9 +609,10 @@ class ParametrizationProblem::Solver {
   bool field_frame_solve();
   // Local repair rounds (at most max_rounds) from the current bad faces; ends at the best pose.
   void local_repair(int max_rounds);
-  // One local repair round; false when the repair should stop.
+  // One local repair round (repair_step), its bad faces and time recorded; false when the repair
+  // should stop.
   bool repair_round(int round, RepairTrack& track);
-  bool repair_step(int round, RepairTrack& track);  // one round; false: stop
+  bool repair_step(int round, RepairTrack& track);
   // options_.halving_rounds > 0 and the bad faces have not halved over that many rounds.
   bool stops_halving() const;
   // Constrains faces that went bad outside the constrained set; true when `next` is rejected.

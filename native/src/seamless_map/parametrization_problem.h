@@ -90,9 +90,9 @@ struct ParametrizationSolveStats {
   double constraint_violation = 0;  // max |Cz - b| of the caller's linear constraints
   int ipopt_solves = 0, ipopt_iterations = 0;
   int repair_rounds = 0, relinearizations = 0;
-  std::vector<int> bad_after_round;       // bad faces of the kept pose after each repair round
-  std::vector<double> seconds_of_round;   // time of each repair round
-  int field_frame_solves = 0;  // global solves with every face in its field-frame sectors
+  std::vector<int> bad_after_round;      // bad faces of the kept pose after each repair round
+  std::vector<double> seconds_of_round;  // time of each repair round
+  int field_frame_solves = 0;            // global solves with every face in its field-frame sectors
   int max_region_faces = 0, max_qp_variables = 0;
   int non_integer_pivots = 0, redundant_constraints = 0, inconsistent_constraints = 0;
   double seconds_assembly = 0, seconds_cholesky = 0, seconds_ipopt = 0;
