@@ -10,8 +10,9 @@ def check(condition, what):
         FAILURES.append(what)
 
 
-def run(qgp, *args):
-    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True)
+def run(qgp, *args, env=None):
+    """qgp with the arguments (in `env`, the environment, when given)."""
+    return subprocess.run([qgp, *map(str, args)], capture_output=True, text=True, env=env)
 
 
 def summary():

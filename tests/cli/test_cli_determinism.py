@@ -42,17 +42,10 @@ def shuffled_copy(source, target, seed):
     return len(faces)
 
 
-def remesh(qgp, mesh, target, extra, out, threads=None):
-    env_before = os.environ.get("OMP_NUM_THREADS")
-    if threads is not None:
-        os.environ["OMP_NUM_THREADS"] = str(threads)
-    try:
-        r = run(qgp, "remesh", mesh, "--faces", target, "-o", out, *extra)
-    finally:
-        if env_before is None:
-            os.environ.pop("OMP_NUM_THREADS", None)
-        else:
-            os.environ["OMP_NUM_THREADS"] = env_before
+def remesh(qgp, mesh, target, extra, out, threads):
+    """(exit status, the written OBJ without its comment lines) of one run with `threads` OpenMP threads."""
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    r = run(qgp, "remesh", mesh, "--faces", target, "-o", out, *extra, env=env)
     if not os.path.exists(out):
         return r.returncode, b""
     return r.returncode, b"".join(line for line in open(out, "rb") if not line.startswith(b"#"))
