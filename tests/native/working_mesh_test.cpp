@@ -127,6 +127,39 @@ INSTANTIATE_TEST_SUITE_P(Shared, WorkingMeshOverMeshes, ::testing::ValuesIn(test
                            return n;
                          });
 
+// A dense, noisy sculpt-like torus (200 x 400 quads, radial noise of a fifth of an edge): the
+// decimation reaches its budget, keeps the torus's topology, turns no face against the surface
+// (each working face's normal within 60 degrees of the torus's normal at its centroid) and gives
+// the same faces on a second run.
+TEST(WorkingMeshGenerated, DenseNoisyTorusReachesItsBudget) {
+  const double major = 3, minor = 1;
+  TriMesh mesh = test::make_grid_torus(400, 200, major, minor).mesh;
+  const double edge = 2 * M_PI * minor / 200;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const Vec3 p = mesh.position(v);
+    const Vec3 ring = Vec3(p.x(), p.y(), 0).normalized() * major;
+    const double noise = 0.2 * edge * std::sin(37.0 * v) * std::sin(11.0 * v + 1);
+    mesh.V.row(v) += noise * (p - ring).normalized().transpose();
+  }
+  const int budget = 5000;
+  Progress progress;
+  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  ASSERT_TRUE(w.decimated);
+  EXPECT_LE(w.mesh.num_faces(), budget);
+  EXPECT_GE(w.mesh.num_faces(), budget - 2);
+  EXPECT_EQ(w.mesh.num_vertices() - w.mesh.num_edges() + w.mesh.num_faces(), 0);
+  for (int f = 0; f < w.mesh.num_faces(); ++f) {
+    const Vec3 centroid =
+        (w.mesh.position(w.mesh.F(f, 0)) + w.mesh.position(w.mesh.F(f, 1)) + w.mesh.position(w.mesh.F(f, 2))) / 3;
+    const Vec3 ring = Vec3(centroid.x(), centroid.y(), 0).normalized() * major;
+    const Vec3 outward = (centroid - ring).normalized();
+    EXPECT_GT(w.mesh.face_normal_unnormalized(f).normalized().dot(outward), 0.5) << "face " << f;
+  }
+  const WorkingMesh again = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  EXPECT_EQ(again.mesh.F, w.mesh.F);
+  EXPECT_EQ(again.vertex_of_input, w.vertex_of_input);
+}
+
 TEST(WorkingMeshBudget, FivePerQuadAboveTheFloor) {
   EXPECT_EQ(working_face_budget(8000), 40000);
   EXPECT_EQ(working_face_budget(100), kMinWorkingFaces);

@@ -1,26 +1,15 @@
 #include "intake/working_mesh.h"
 
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
-#include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
-#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
-#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <algorithm>
 #include <map>
 #include <numeric>
 
 #include "core/error.h"
+#include "intake/edge_collapse.h"
 
 namespace qgp {
 
 namespace {
-
-// Double precision: kept vertices keep their input coordinates bit for bit.
-struct DoubleTraits : OpenMesh::DefaultTraits {
-  using Point = OpenMesh::Vec3d;
-  using Normal = OpenMesh::Vec3d;
-};
-using OmMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
 // Same Euler characteristic and number of boundary loops.
 bool same_topology(const TriMesh& input, const TriMesh& working) {
@@ -48,62 +37,32 @@ WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feat
   };
   if (mesh.num_faces() <= kDecimateAboveBudget * max_faces) return keep_input();
 
-  OmMesh om;
-  om.request_vertex_status();
-  om.request_edge_status();
-  om.request_face_status();
-  om.request_face_normals();
-  OpenMesh::VPropHandleT<int> input_index;
-  om.add_property(input_index);
-  std::vector<OmMesh::VertexHandle> handles(mesh.num_vertices());
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    handles[v] = om.add_vertex(OmMesh::Point(mesh.V(v, 0), mesh.V(v, 1), mesh.V(v, 2)));
-    om.property(input_index, handles[v]) = v;
-  }
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (!om.add_face(handles[mesh.F(f, 0)], handles[mesh.F(f, 1)], handles[mesh.F(f, 2)]).is_valid())
-      return keep_input();  // cannot happen on a manifold, oriented component
-  om.update_face_normals();
   // Feature and boundary edges stay: their vertices never move or go.
+  std::vector<char> locked(mesh.num_vertices(), 0);
   for (int e = 0; e < mesh.num_edges(); ++e)
     if (feature_edges[e] || mesh.is_boundary_edge(e)) {
       const int h = mesh.edge_halfedge[e];
-      om.status(handles[mesh.from(h)]).set_locked(true);
-      om.status(handles[mesh.to(h)]).set_locked(true);
+      locked[mesh.from(h)] = locked[mesh.to(h)] = 1;
     }
-  progress.check_cancel();
+  EdgeCollapseOptions options;
+  options.max_faces = max_faces;
+  const FaceMatrix faces = collapse_edges(mesh, locked, options, progress);
+  if (faces.rows() == mesh.num_faces()) return keep_input();  // every vertex locked (or no legal collapse)
 
-  OpenMesh::Decimater::DecimaterT<OmMesh> decimater(om);
-  OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle quadric;
-  OpenMesh::Decimater::ModNormalFlippingT<OmMesh>::Handle normal_flipping;
-  OpenMesh::Decimater::ModAspectRatioT<OmMesh>::Handle aspect_ratio;
-  decimater.add(quadric);
-  decimater.add(normal_flipping);
-  decimater.add(aspect_ratio);
-  decimater.module(quadric).unset_max_err();
-  decimater.module(normal_flipping).set_max_normal_deviation(60.0);
-  decimater.module(aspect_ratio).set_binary(true);
-  decimater.module(aspect_ratio).set_aspect_ratio(5.0);
-  if (!decimater.initialize()) return keep_input();
-  const size_t collapses = decimater.decimate_to_faces(0, static_cast<size_t>(max_faces));
-  progress.check_cancel();
-  if (collapses == 0) return keep_input();  // every vertex locked (or no legal collapse)
-  om.garbage_collection();
-
-  // Back to a TriMesh (OpenMesh keeps the orientation of every face).
+  // The kept vertices, in input order, with their input positions.
   WorkingMesh result;
-  result.mesh.V.resize(static_cast<int>(om.n_vertices()), 3);
-  result.vertex_of_input.resize(om.n_vertices());
-  for (const auto vh : om.vertices()) {
-    const int v = vh.idx();
-    result.vertex_of_input[v] = om.property(input_index, vh);
-    result.mesh.V.row(v) = mesh.V.row(result.vertex_of_input[v]);
-  }
-  result.mesh.F.resize(static_cast<int>(om.n_faces()), 3);
-  for (const auto fh : om.faces()) {
-    int k = 0;
-    for (const auto vh : om.fv_ccw_range(fh)) result.mesh.F(fh.idx(), k++) = vh.idx();
-  }
+  std::vector<char> kept(mesh.num_vertices(), 0);
+  for (int i = 0; i < faces.size(); ++i) kept[faces.data()[i]] = 1;
+  std::vector<int> working_index(mesh.num_vertices(), -1);
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    if (kept[v]) {
+      working_index[v] = static_cast<int>(result.vertex_of_input.size());
+      result.vertex_of_input.push_back(v);
+    }
+  result.mesh.V.resize(static_cast<int>(result.vertex_of_input.size()), 3);
+  for (int v = 0; v < result.mesh.num_vertices(); ++v) result.mesh.V.row(v) = mesh.V.row(result.vertex_of_input[v]);
+  result.mesh.F = faces;
+  for (int i = 0; i < result.mesh.F.size(); ++i) result.mesh.F.data()[i] = working_index[result.mesh.F.data()[i]];
   try {
     build_connectivity(result.mesh);
   } catch (const Error&) {

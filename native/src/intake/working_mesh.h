@@ -1,7 +1,7 @@
 // Working resolution of a dense component (DESIGN: "very dense inputs are decimated to a working
 // resolution derived from the target quad count").
 //
-// Quadric edge collapses (OpenMesh Decimater: quadric error, normal flipping <= 60deg, aspect
+// Quadric edge collapses (intake/edge_collapse.h: quadric error, normal deviation <= 60deg, aspect
 // ratio) down to a face budget. Vertices of feature and boundary edges are locked, so every
 // feature and boundary edge stays an edge of the working mesh and every kept vertex keeps its
 // input position. The result has the input's topology (checked: Euler characteristic, boundary
