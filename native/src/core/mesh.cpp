@@ -18,6 +18,22 @@ double TriMesh::bounding_box_diagonal() const {
   return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
 }
 
+void sort_by_edge_key(std::vector<std::pair<uint64_t, int>>& keyed, int num_vertices) {
+  for (const auto& k : keyed)
+    if ((k.first >> 32) >= static_cast<uint64_t>(std::max(num_vertices, 0))) {
+      std::sort(keyed.begin(), keyed.end());  // not keys of this many vertices
+      return;
+    }
+  std::vector<size_t> first(static_cast<size_t>(num_vertices) + 1, 0);
+  for (const auto& k : keyed) ++first[(k.first >> 32) + 1];
+  for (int v = 0; v < num_vertices; ++v) first[v + 1] += first[v];
+  std::vector<std::pair<uint64_t, int>> sorted(keyed.size());
+  std::vector<size_t> next(first.begin(), first.end() - 1);
+  for (const auto& k : keyed) sorted[next[k.first >> 32]++] = k;
+  for (int v = 0; v < num_vertices; ++v) std::sort(sorted.begin() + first[v], sorted.begin() + first[v + 1]);
+  keyed.swap(sorted);
+}
+
 void build_connectivity(TriMesh& mesh) {
   const int nh = mesh.num_halfedges();
   // Sort halfedges by their undirected key so that the (at most two) halfedges of an edge meet.
@@ -26,7 +42,7 @@ void build_connectivity(TriMesh& mesh) {
     const uint64_t a = static_cast<uint32_t>(mesh.from(h)), b = static_cast<uint32_t>(mesh.to(h));
     keyed[h] = {std::min(a, b) << 32 | std::max(a, b), h};
   }
-  std::sort(keyed.begin(), keyed.end());
+  sort_by_edge_key(keyed, mesh.num_vertices());
   mesh.opposite.assign(nh, -1);
   mesh.edge_of.assign(nh, -1);
   mesh.edge_halfedge.clear();

@@ -6,6 +6,8 @@
 #pragma once
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace qgp {
@@ -53,6 +55,10 @@ struct TriMesh {
 // Fills opposite/edge_of/edge_halfedge/vertex_halfedge. Throws Error(InvalidMesh) when an edge
 // has more than two faces or two faces traverse it in the same direction.
 void build_connectivity(TriMesh& mesh);
+
+// Sorts (undirected edge key, id) pairs exactly as std::sort would, in linear time: a counting sort
+// on the key's lower vertex (its high 32 bits, < num_vertices), then each vertex's few pairs.
+void sort_by_edge_key(std::vector<std::pair<uint64_t, int>>& keyed, int num_vertices);
 
 // Outgoing halfedges of vertex v in counter-clockwise order (starting at vertex_halfedge[v]).
 std::vector<int> outgoing_halfedges(const TriMesh& mesh, int v);

@@ -39,7 +39,7 @@ struct EdgeFaces {
     for (int t = 0; t < static_cast<int>(soup.triangles.size()); ++t)
       for (int k = 0; k < 3; ++k)
         sorted.push_back({edge_key(soup.triangles[t][k], soup.triangles[t][(k + 1) % 3]), 3 * t + k});
-    std::sort(sorted.begin(), sorted.end());
+    sort_by_edge_key(sorted, static_cast<int>(soup.positions.size()));
   }
   // Calls fn(first, last) for each run of halfedges sharing an undirected edge.
   template <class Fn>

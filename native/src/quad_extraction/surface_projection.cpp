@@ -78,19 +78,20 @@ static std::vector<std::array<int, 3>> triangles_of(const TriMesh& mesh) {
 
 TriangleBvh::TriangleBvh(const TriMesh& mesh) : TriangleBvh(mesh.V, triangles_of(mesh)) {}
 
+// Leaves take the boxes of their triangles, inner nodes the union of their children's boxes.
 int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroids) {
   const int id = static_cast<int>(nodes_.size());
   nodes_.push_back(Node{});
-  Eigen::AlignedBox3d box, cbox;
-  for (int i = begin; i < end; ++i) {
-    for (int k = 0; k < 3; ++k) box.extend(vertices_[triangles_[order_[i]][k]]);
-    cbox.extend(centroids[order_[i]]);
-  }
-  nodes_[id].box = box;
   if (end - begin <= 4) {
+    Eigen::AlignedBox3d box;
+    for (int i = begin; i < end; ++i)
+      for (int k = 0; k < 3; ++k) box.extend(vertices_[triangles_[order_[i]][k]]);
+    nodes_[id].box = box;
     nodes_[id].begin = begin, nodes_[id].end = end;
     return id;
   }
+  Eigen::AlignedBox3d cbox;
+  for (int i = begin; i < end; ++i) cbox.extend(centroids[order_[i]]);
   int axis = 0;
   cbox.sizes().maxCoeff(&axis);
   const int mid = (begin + end) / 2;
@@ -99,6 +100,7 @@ int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroids) {
   const int left = build(begin, mid, centroids);
   const int right = build(mid, end, centroids);
   nodes_[id].left = left, nodes_[id].right = right;
+  nodes_[id].box = nodes_[left].box.merged(nodes_[right].box);
   return id;
 }
 
