@@ -131,8 +131,8 @@ class EdgeCollapser {
       if (face_alive_[refs_[i]]) visit(refs_[i]);
   }
 
-  // Both directions of every edge whose removed endpoint is free, lowest error first.
-  std::vector<Candidate> sorted_candidates() const {
+  // Both directions of every edge whose removed endpoint is free (unsorted).
+  std::vector<Candidate> collapse_candidates() const {
     std::vector<Candidate> candidates;
     for (size_t f = 0; f < faces_.size(); ++f) {
       if (!face_alive_[f]) continue;
@@ -143,7 +143,6 @@ class EdgeCollapser {
         if (!locked_[b]) candidates.push_back({quadrics_[b].at_sum(quadrics_[a], position(a)), b, a});
       }
     }
-    std::sort(candidates.begin(), candidates.end());
     return candidates;
   }
 
@@ -153,15 +152,23 @@ class EdgeCollapser {
   bool collapse_one_pass() {
     index_vertex_faces();
     std::fill(changed_.begin(), changed_.end(), 0);
-    const std::vector<Candidate> candidates = sorted_candidates();
+    std::vector<Candidate> candidates = collapse_candidates();
     const int needed = (alive_faces_ - options_.max_faces + 1) / 2;
-    const size_t window =
-        std::max(static_cast<size_t>(2 * needed), static_cast<size_t>(kPassWindow * candidates.size()));
+    const size_t window = std::min(candidates.size(), std::max(static_cast<size_t>(2 * needed),
+                                                               static_cast<size_t>(kPassWindow * candidates.size())));
     const int minimum = std::max(1, static_cast<int>(kPassMinimum * needed));
     int collapses = 0;
+    // Sorted up to the window first; the rest only if the pass goes past it.
+    std::nth_element(candidates.begin(), candidates.begin() + window, candidates.end());
+    std::sort(candidates.begin(), candidates.begin() + window);
+    bool rest_sorted = false;
     size_t i = 0;
     for (; i < candidates.size() && alive_faces_ > options_.max_faces; ++i) {
-      if (i >= window && collapses >= minimum) break;
+      if (i >= window) {
+        if (collapses >= minimum) break;
+        if (!rest_sorted) std::sort(candidates.begin() + window, candidates.end());
+        rest_sorted = true;
+      }
       const Candidate& c = candidates[i];
       if (removed_[c.from] || removed_[c.to] || changed_[c.from] || changed_[c.to]) continue;
       if (!link_condition_holds(c.from, c.to) || !geometry_allows(c.from, c.to)) continue;

@@ -61,13 +61,14 @@ TriangleBvh::TriangleBvh(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::R
     : triangles_(std::move(triangles)) {
   vertices_.resize(V.rows());
   for (int v = 0; v < V.rows(); ++v) vertices_[v] = V.row(v).transpose();
-  std::vector<Vec3> centroids(triangles_.size());
+  std::vector<Item> items(triangles_.size());
   for (size_t t = 0; t < triangles_.size(); ++t)
-    centroids[t] = (vertices_[triangles_[t][0]] + vertices_[triangles_[t][1]] + vertices_[triangles_[t][2]]) / 3.0;
-  order_.resize(triangles_.size());
-  for (size_t t = 0; t < order_.size(); ++t) order_[t] = static_cast<int>(t);
+    items[t] = {(vertices_[triangles_[t][0]] + vertices_[triangles_[t][1]] + vertices_[triangles_[t][2]]) / 3.0,
+                static_cast<int>(t)};
   nodes_.reserve(triangles_.size() / 2 + 1);
-  if (!triangles_.empty()) build(0, static_cast<int>(order_.size()), centroids);
+  if (!triangles_.empty()) build(0, static_cast<int>(items.size()), items);
+  order_.resize(items.size());
+  for (size_t i = 0; i < items.size(); ++i) order_[i] = items[i].triangle;
 }
 
 static std::vector<std::array<int, 3>> triangles_of(const TriMesh& mesh) {
@@ -79,26 +80,26 @@ static std::vector<std::array<int, 3>> triangles_of(const TriMesh& mesh) {
 TriangleBvh::TriangleBvh(const TriMesh& mesh) : TriangleBvh(mesh.V, triangles_of(mesh)) {}
 
 // Leaves take the boxes of their triangles, inner nodes the union of their children's boxes.
-int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroids) {
+int TriangleBvh::build(int begin, int end, std::vector<Item>& items) {
   const int id = static_cast<int>(nodes_.size());
   nodes_.push_back(Node{});
   if (end - begin <= 4) {
     Eigen::AlignedBox3d box;
     for (int i = begin; i < end; ++i)
-      for (int k = 0; k < 3; ++k) box.extend(vertices_[triangles_[order_[i]][k]]);
+      for (int k = 0; k < 3; ++k) box.extend(vertices_[triangles_[items[i].triangle][k]]);
     nodes_[id].box = box;
     nodes_[id].begin = begin, nodes_[id].end = end;
     return id;
   }
   Eigen::AlignedBox3d cbox;
-  for (int i = begin; i < end; ++i) cbox.extend(centroids[order_[i]]);
+  for (int i = begin; i < end; ++i) cbox.extend(items[i].centroid);
   int axis = 0;
   cbox.sizes().maxCoeff(&axis);
   const int mid = (begin + end) / 2;
-  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                   [&](int x, int y) { return centroids[x][axis] < centroids[y][axis]; });
-  const int left = build(begin, mid, centroids);
-  const int right = build(mid, end, centroids);
+  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
+                   [&](const Item& x, const Item& y) { return x.centroid[axis] < y.centroid[axis]; });
+  const int left = build(begin, mid, items);
+  const int right = build(mid, end, items);
   nodes_[id].left = left, nodes_[id].right = right;
   nodes_[id].box = nodes_[left].box.merged(nodes_[right].box);
   return id;

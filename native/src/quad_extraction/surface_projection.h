@@ -33,7 +33,13 @@ class TriangleBvh {
     int left = -1, right = -1;  // children, or -1 for a leaf
     int begin = 0, end = 0;     // leaf: order_[begin..end)
   };
-  int build(int begin, int end, std::vector<Vec3>& centroids);
+  // A triangle's centroid and index, partitioned in place while building (contiguous, so the
+  // partitions stay in cache).
+  struct Item {
+    Vec3 centroid;
+    int triangle;
+  };
+  int build(int begin, int end, std::vector<Item>& items);
 
   std::vector<Vec3> vertices_;
   std::vector<std::array<int, 3>> triangles_;
