@@ -9,6 +9,7 @@ RESULTS/scaling.md and IMAGES/bench_compare_*.png, IMAGES/bench_scaling_*.png.
 import argparse
 import csv
 import json
+import math
 import os
 from collections import defaultdict
 
@@ -21,8 +22,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 TOOL_LABEL = {"qgp": "Quantized Retopo", "quadriflow": "QuadriFlow"}
 TOOL_STYLE = {"qgp": dict(color="tab:blue", marker="o"), "quadriflow": dict(color="tab:orange", marker="s")}
-STAGES = ["intake", "cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction",
-          "metrics"]
+STAGES = ["intake", "working_mesh", "cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm",
+          "quad_extraction", "metrics"]
 
 
 def number(value):
@@ -237,17 +238,34 @@ def peak_mb(row):
     return None if row["status"] == "timeout" else number(row["peak_rss_mb"])
 
 
+def growth_exponents(rows):
+    """Per size-series row: the exponent k of wall time ~ triangles^k from the shape's previous level
+    (1 is linear; n log n shows as slightly above 1); None for a shape's first level or a failed run."""
+    exponents, previous = {}, {}
+    for i, r in enumerate(rows):
+        if r["series"] != "size" or r["status"] != "ok":
+            continue
+        n, t = int(r["triangles"]), number(r["wall_s"])
+        before = previous.get(r["shape"])
+        if before and t and before[1] and n > before[0]:
+            exponents[i] = math.log(t / before[1]) / math.log(n / before[0])
+        previous[r["shape"]] = (n, t)
+    return exponents
+
+
 def scaling_markdown(rows):
-    lines = ["| series | shape | triangles | target | status | wall s | peak MB | quads | "
+    exponents = growth_exponents(rows)
+    lines = ["| series | shape | triangles | target | status | wall s | growth | peak MB | quads | "
              + " | ".join(s.replace("_", " ") for s in STAGES) + " |",
-             "|---|---|---:|---:|---|---:|---:|---:|" + "---:|" * len(STAGES)]
-    for r in rows:
+             "|---|---|---:|---:|---|---:|---:|---:|---:|" + "---:|" * len(STAGES)]
+    for i, r in enumerate(rows):
         status = r["status"]
         if status != "ok" and r["message"]:
             message = r["message"].replace("|", "/")
             status += ": " + (message if len(message) <= 50 else message[:47] + "...")
         lines.append(f"| {r['series']} | {r['shape']} | {int(r['triangles']):,} | {r['target']} | {status} "
-                     f"| {fmt(r['wall_s'], '.2f')} | {fmt(peak_mb(r), '.0f')} | {fmt(r['quads'], '.0f')} | "
+                     f"| {fmt(r['wall_s'], '.2f')} | {fmt(exponents.get(i), '.2f')} | {fmt(peak_mb(r), '.0f')} "
+                     f"| {fmt(r['quads'], '.0f')} | "
                      + " | ".join(fmt(r[s + '_s'], '.2f') for s in STAGES) + " |")
     return "\n".join(lines) + "\n"
 

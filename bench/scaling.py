@@ -26,8 +26,8 @@ import numpy as np
 GNU_TIME = "/usr/bin/time"
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
-STAGES = ["intake", "cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm", "quad_extraction",
-          "metrics"]
+STAGES = ["intake", "working_mesh", "cross_field", "cut_graph", "seamless_map", "tmesh", "quantization", "igm",
+          "quad_extraction", "metrics"]
 COLUMNS = ["series", "shape", "level", "triangles", "target", "status", "message", "wall_s", "peak_rss_mb",
            "quads"] + [s + "_s" for s in STAGES] + ["total_s"]
 

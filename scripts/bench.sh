@@ -2,11 +2,12 @@
 # The whole benchmark in one command (docs/benchmark.md):
 #   1. Quantized Retopo vs Blender's QuadriFlow in one Blender process (bench/compare_quadriflow.py),
 #      on the shared meshes and on sculpts it generates (a shared mesh subdivided and displaced)
-#   2. scaling of the native pipeline against input size and target density (bench/scaling.py)
+#   2. scaling of the native pipeline against input size and target density (bench/scaling.py), and
+#      re-quantizing at a new density in the same session, as the redo panel does (bench/requantize.py)
 #   3. tables + plots (bench/plots.py) and side-by-side renders (bench/render.py)
 #   4. every shared mesh through `qgp remesh` at 500 / 2 000 / 8 000 quads, each output checked
 #      (bench/robustness.py; issue 23's sweep)
-# Output: bench/results/ (compare.csv/.json/.md, scaling.csv/.md, robustness.csv/.md) and
+# Output: bench/results/ (compare.csv/.json/.md, scaling.csv/.md, requantize.csv/.md, robustness.csv/.md) and
 # docs/images/ (plots, renders).
 #
 #   ./scripts/bench.sh [--quick] [--skip-compare] [--skip-scaling] [--skip-render] [--skip-robustness]
@@ -38,6 +39,7 @@ if [ "$QUICK" = 1 ]; then
   DENSITY_LEVEL=${DENSITY_LEVEL:-1}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:2000}
   SCULPTS=${SCULPTS-spot.obj:2}   # BASE:LEVELS; spot at 2 levels: 0.14 M triangles
+  REQUANTIZE_MESHES=${REQUANTIZE_MESHES:-spot.obj,fandisk.obj}
   ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-spot.obj,truck.obj,teapot.obj}
   ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500}
 else
@@ -48,6 +50,7 @@ else
   DENSITY_LEVEL=${DENSITY_LEVEL:-2}
   CASES=${CASES:-spot.obj:2000,fertility.off:2000,fandisk.obj:8000}
   SCULPTS=${SCULPTS-spot.obj:3,spot.obj:4}   # about 0.56 M and 2.2 M triangles
+  REQUANTIZE_MESHES=${REQUANTIZE_MESHES:-spot.obj,kitten.obj,fandisk.obj,rocker-arm.obj,stanford-bunny.obj,armadillo.obj,nefertiti.obj}
   ROBUSTNESS_MESHES=${ROBUSTNESS_MESHES:-}   # empty: every mesh file
   ROBUSTNESS_TARGETS=${ROBUSTNESS_TARGETS:-500,2000,8000}
 fi
@@ -87,6 +90,8 @@ t_compare=$(date +%s)
 if [ "$DO_SCALING" = 1 ]; then
   QGP_MESHES="$MESH_DIR" $PYTHON bench/scaling.py --max-triangles "$MAX_TRIANGLES" --densities "$DENSITIES" \
     --density-level "$DENSITY_LEVEL" --timeout "$SCALING_TIMEOUT" --out "$RESULTS"
+  QGP_MESHES="$MESH_DIR" QGP_LIBRARY="$PWD/build/lib/libqgp.so" $PYTHON bench/requantize.py --meshes "$REQUANTIZE_MESHES" \
+    --out "$RESULTS"
 fi
 t_scaling=$(date +%s)
 $PYTHON bench/plots.py --results "$RESULTS" --images "$IMAGES"
@@ -103,4 +108,5 @@ fi
 end=$(date +%s)
 echo "bench: compare $((t_compare - start)) s, scaling $((t_scaling - t_compare)) s, plots+renders" \
   "$((t_render - t_scaling)) s, robustness $((end - t_render)) s"
-echo "bench: tables $RESULTS/compare.md $RESULTS/scaling.md $RESULTS/robustness.md, images $IMAGES/"
+echo "bench: tables $RESULTS/compare.md $RESULTS/scaling.md $RESULTS/requantize.md $RESULTS/robustness.md," \
+  "images $IMAGES/"
