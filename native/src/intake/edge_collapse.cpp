@@ -178,8 +178,23 @@ class EdgeCollapser {
     return i == candidates.size();
   }
 
+  int alive_face_count(int v) const {
+    int n = 0;
+    for_each_face(v, [&](int) { ++n; });
+    return n;
+  }
+
   // The endpoints' one-rings share exactly the edge's two opposite vertices.
+  // Neither opposite vertex is left with fewer than three faces (a tetrahedron would fold into two
+  // faces back to back).
   bool link_condition_holds(int from, int to) {
+    bool opposite_too_thin = false;
+    for_each_face(from, [&](int f) {
+      for (int w : faces_[f])
+        if (w != from && w != to && (faces_[f][0] == to || faces_[f][1] == to || faces_[f][2] == to))
+          opposite_too_thin |= alive_face_count(w) <= 3;
+    });
+    if (opposite_too_thin) return false;
     const int mark = ++stamp_value_, seen = ++stamp_value_;
     for_each_face(from, [&](int f) {
       for (int w : faces_[f])
