@@ -494,6 +494,13 @@ bool quads_expected_from_layout(const std::string& name, double sharp, double ta
   return runs.count(run) > 0;
 }
 
+// Runs whose source differs between machines (BLAS kernels chosen by the CPU change the solvers'
+// last bits): mnf07 at 500 quads takes the map's quads (6 flipped) on one machine and the layout's
+// (2 flipped after the untangle, the map keeping 6) on another, with the same binary (2026-11-29).
+bool either_source(const std::string& name, double target) {
+  return name == "mnf07HeadFem_rem_rem_p.obj" && target == 500;
+}
+
 // Known defect (measured 2026-11-28, with intake's canonical triangle order; docs/limitations.md):
 // quads that stay flipped against the surface after the untangle. Every other run: none.
 int known_flipped_quads(const std::string& name, double sharp, double target) {
@@ -531,8 +538,9 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
       // it had about 6 600 and 0.83 % at the density's own scale; measured 2026-11-27).
       if (target >= 8000) EXPECT_LE(m.quad.hausdorff, name == "block.obj" && sharp > 0 ? 0.0125 : 0.01) << name;
       const bool from_layout = session.report()["extraction"]["layout_components"].get<int>() > 0;
-      EXPECT_EQ(from_layout, quads_expected_from_layout(name, sharp, target))
-          << name << "@" << target << ": quads from " << session.report()["extraction"]["components"][0]["path"];
+      if (!either_source(name, target))
+        EXPECT_EQ(from_layout, quads_expected_from_layout(name, sharp, target))
+            << name << "@" << target << ": quads from " << session.report()["extraction"]["components"][0]["path"];
       const Json& t = session.report()["timings_s"];
       auto sec = [&](const char* k) { return t.value(k, 0.0); };
       std::cout << name << " | " << sharp << " | " << target << " | " << m.quads << " | " << m.quad.irregular_vertices
