@@ -118,7 +118,7 @@ class Steps:
 
     # 2. a long modal run, Esc pressed while the native job runs
     def start_esc(self):
-        self.source = new_source(bpy.ops.mesh.primitive_uv_sphere_add, segments=400, ring_count=200)
+        self.source = new_source(bpy.ops.mesh.primitive_uv_sphere_add, segments=800, ring_count=400)
         self.before = scene_state()
         self.calls_at_start = len(calls)
         result["runs"]["esc"] = {"invoke": invoke(self.source, 800), "started": time.time()}
