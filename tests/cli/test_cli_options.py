@@ -7,10 +7,10 @@ failed, 5 complete except named parts. Outputs are read back: the -o quad mesh (
 edge-manifold, the input's Euler characteristic, as many faces as the report says), the
 --layout-out polylines (one per T-edge),
 features from --sharp-angle and --features (counted here independently from the input's dihedral
-angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, and the
-welding of a triangle soup (--no-weld), a many-part mesh some of whose parts' layouts give no quads
-(rescued, exit 0), a non-orientable part (exit 5, kept as triangles), and --atlas-out's texture
-atlas.
+angles), --edge-length, --quantizer, --refuse-non-manifold with --drop-bad-components, the report's
+peak memory (the run's own, not its parent's), and the welding of a triangle soup (--no-weld), a
+many-part mesh some of whose parts' layouts give no quads (rescued, exit 0), a non-orientable part
+(exit 5, kept as triangles), and --atlas-out's texture atlas.
 """
 import argparse
 import json
@@ -392,6 +392,21 @@ def test_non_orientable_part(qgp, meshes, tmp):
           "-o: the strip's 16 input triangles, corner by corner, as the last object")
 
 
+def test_peak_memory_is_its_own(qgp, meshes, tmp):
+    """The report's peak_memory_mb is the run's own: started by a parent holding 800 MB (as Blender
+    holding a dense sculpt starts the worker), spot at 500 quads reports far less than that (getrusage's
+    ru_maxrss carried the parent's resident memory at the fork across the exec)."""
+    ballast = bytearray(800 << 20)
+    for i in range(0, len(ballast), 4096):  # touch every page, so that it is resident
+        ballast[i] = 1
+    report = os.path.join(tmp, "memory.json")
+    proc = run(qgp, "remesh", os.path.join(meshes, "spot.obj"), "-o", os.path.join(tmp, "memory.obj"), "--faces", 500,
+               "--report", report)
+    del ballast
+    peak = json.load(open(report)).get("peak_memory_mb", 0) if proc.returncode == 0 else 0
+    check(0 < peak < 400, f"peak_memory_mb of a run started by an 800 MB parent: {peak:.0f} MB, its own")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--qgp", required=True)
@@ -401,7 +416,7 @@ def main():
         for test in (test_usage_errors, test_unusable_input, test_stage_failure, test_remesh_outputs, test_edge_length,
                      test_quad_count, test_symmetry, test_sizing,
                      test_features, test_drop_bad_components, test_weld, test_rescued_parts, test_non_orientable_part,
-                     test_atlas_out):
+                     test_atlas_out, test_peak_memory_is_its_own):
             print(f"== {test.__name__}")
             if test in (test_unusable_input,):
                 test(args.qgp, tmp)
