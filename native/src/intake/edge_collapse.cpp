@@ -276,7 +276,9 @@ class EdgeCollapser {
 
 FaceMatrix collapse_edges(const TriMesh& mesh, const std::vector<char>& locked, const EdgeCollapseOptions& options,
                           Progress& progress) {
-  EdgeCollapser collapser(mesh, locked, options);
+  EdgeCollapseOptions checked = options;
+  checked.max_faces = std::max(checked.max_faces, 0);
+  EdgeCollapser collapser(mesh, locked, checked);
   collapser.run(progress);
   return collapser.remaining_faces();
 }

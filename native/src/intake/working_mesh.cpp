@@ -21,7 +21,7 @@ bool same_topology(const TriMesh& input, const TriMesh& working) {
 }  // namespace
 
 int working_face_budget(double target_quads) {
-  const double budget = kWorkingFacesPerQuad * std::max(target_quads, 0.0);
+  const double budget = kWorkingFacesPerQuad * (target_quads > 0 ? target_quads : 0.0);  // NaN: none
   return static_cast<int>(std::min(std::max(budget, double(kMinWorkingFaces)), 1e9));
 }
 
