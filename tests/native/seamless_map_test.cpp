@@ -499,33 +499,65 @@ TEST(ParametrizationProblem, CancelStopsTheIpoptRepair) {
   EXPECT_LE(updates_after_cancel, 1);
 }
 
-TEST(ParametrizationProblem, CountStagnationEndsARepairThatCannotSucceed) {
-  // Hard constraints pin the three corners of faces to clockwise triangles: no pose unfolds them.
-  // The full budget ends with only those folded (18 rounds here); with count_stagnation_rounds the
-  // repair stops one turn of the strategies after the count last dropped (5 rounds here, folds
-  // around the pinned faces left): the trade a caller with a fallback makes.
-  CubeProblem p;
-  ASSERT_EQ(p.free_map.stats.flipped + p.free_map.stats.degenerate, 0);
-  const int forced_faces[] = {40, 200, 333};
-  for (int f : forced_faces) {
+// Hard constraints pin the three corners of faces 40, 200 and 333 to clockwise triangles: no pose
+// unfolds them.
+void pin_clockwise_faces(CubeProblem& p) {
+  for (int f : {40, 200, 333}) {
     const Vec2 p0(p.free_map.param.uv(3 * f, 0), p.free_map.param.uv(3 * f, 1));
     const Vec2 corner[3] = {p0, p0 + Vec2(0, 0.4), p0 + Vec2(0.4, 0)};  // clockwise
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 2; ++a) p.problem.add_linear_constraint({{3 * f + k, a, 1.0}}, corner[k][a]);
   }
+}
+
+void expect_pinned_faces_folded(const ParametrizationSolution& s) {
+  EXPECT_LT(s.stats.constraint_violation, 1e-9);
+  EXPECT_GE(s.stats.flipped, 3);
+  EXPECT_EQ(static_cast<int>(s.stats.bad_after_round.size()), s.stats.repair_rounds);
+  EXPECT_EQ(static_cast<int>(s.stats.seconds_of_round.size()), s.stats.repair_rounds);
+}
+
+TEST(ParametrizationProblem, CountStagnationEndsARepairThatCannotSucceed) {
+  // The full budget ends with only the pinned faces folded (18 rounds here); with
+  // count_stagnation_rounds the repair stops one turn of the strategies after the count last dropped
+  // (5 rounds here, folds around the pinned faces left): the trade a caller with a fallback makes.
+  CubeProblem p;
+  ASSERT_EQ(p.free_map.stats.flipped + p.free_map.stats.degenerate, 0);
+  pin_clockwise_faces(p);
   ParametrizationSolveOptions plain;
   const ParametrizationSolution unbounded = p.problem.solve(plain, p.progress);
   ParametrizationSolveOptions bounded = plain;
   bounded.count_stagnation_rounds = 4;
   const ParametrizationSolution stopped = p.problem.solve(bounded, p.progress);
-  for (const ParametrizationSolution* s : {&unbounded, &stopped}) {
-    EXPECT_LT(s->stats.constraint_violation, 1e-9);
-    EXPECT_GE(s->stats.flipped, 3);  // the pinned faces stay folded
-  }
+  for (const ParametrizationSolution* s : {&unbounded, &stopped}) expect_pinned_faces_folded(*s);
   // At least one turn of the strategies, fewer rounds than the full budget, never a better result.
   EXPECT_GE(stopped.stats.repair_rounds, bounded.count_stagnation_rounds);
   EXPECT_LT(stopped.stats.repair_rounds, unbounded.stats.repair_rounds);
   EXPECT_LE(unbounded.stats.flipped + unbounded.stats.degenerate, stopped.stats.flipped + stopped.stats.degenerate);
+}
+
+TEST(ParametrizationProblem, RegionStagnationEndsRoundsOverMostOfTheMesh) {
+  // region_stagnation_rounds counts only the rounds without fewer bad faces whose region spans at
+  // least half the faces: the repair goes on at least as long as with count_stagnation_rounds (the
+  // bad faces' rings double until their regions cover most of this small cube), and still ends
+  // before the full budget.
+  CubeProblem p;
+  pin_clockwise_faces(p);
+  ParametrizationSolveOptions plain;
+  const ParametrizationSolution unbounded = p.problem.solve(plain, p.progress);
+  ParametrizationSolveOptions by_count = plain, by_region = plain;
+  by_count.count_stagnation_rounds = 4;
+  by_region.region_stagnation_rounds = 4;
+  const ParametrizationSolution counted = p.problem.solve(by_count, p.progress);
+  const ParametrizationSolution regional = p.problem.solve(by_region, p.progress);
+  expect_pinned_faces_folded(regional);
+  EXPECT_GE(regional.stats.repair_rounds, counted.stats.repair_rounds);
+  EXPECT_LT(regional.stats.repair_rounds, unbounded.stats.repair_rounds);
+  // The last four rounds brought no fewer bad faces than the best before them.
+  const std::vector<int>& bad = regional.stats.bad_after_round;
+  ASSERT_GE(bad.size(), 5u);
+  const int before = *std::min_element(bad.begin(), bad.end() - 4);
+  for (auto it = bad.end() - 4; it != bad.end(); ++it) EXPECT_GE(*it, before);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -522,6 +522,7 @@ struct RepairTrack {
   int best_round = -1;
   int rejected = 0;
   int fewer_bad_round = 0;  // the last round that lowered the best pose's bad faces (0 if none did)
+  int wide_rounds = 0;      // rounds since then over a region of at least half the faces
 };
 
 // Rotations (relative to the field) of the reference shapes of one region while they spread.
@@ -613,6 +614,9 @@ class ParametrizationProblem::Solver {
   // should stop.
   bool repair_round(int round, RepairTrack& track);
   bool repair_step(int round, RepairTrack& track);
+  // A stagnation bound of options_ holds after `round` (no new best, no fewer bad faces, no fewer
+  // bad faces over regions of most of the mesh).
+  bool stagnates(int round, const RepairTrack& track) const;
   // options_.halving_rounds > 0 and the bad faces have not halved over that many rounds.
   bool stops_halving() const;
   // Constrains faces that went bad outside the constrained set; true when `next` is rejected.
@@ -1013,6 +1017,7 @@ bool ParametrizationProblem::Solver::repair_step(int round, RepairTrack& track) 
   // The strategies take turns (a rejected round leaves the pose unchanged).
   static const int kOrder[4] = {kUnfold, kOwnFit, kPropagated, kAllElastic};
   const int strategy = kOrder[round % 4];
+  const int region_faces = nf_ - static_cast<int>(std::count(region_.begin(), region_.end(), 0));
   const Eigen::VectorXd y = solve_region(region_, active_, z_, current_, strategy, pb_ + span_ * t0,
                                          pb_ + span_ * (t0 + 0.5 / rounds_), &status);
   Census next = census(y);
@@ -1033,13 +1038,18 @@ bool ParametrizationProblem::Solver::repair_step(int round, RepairTrack& track) 
   } else if (++track.rejected >= 4) {
     return false;  // no strategy makes progress: a fixed point
   }
-  if (current_.bad() == 0) return false;
-  if (round - track.best_round >= options_.stagnation_rounds) return false;  // no new best for a while
-  if (options_.count_stagnation_rounds > 0 && round - track.fewer_bad_round >= options_.count_stagnation_rounds)
-    return false;  // no fewer bad faces for a while
-  if (stops_halving()) return false;
+  const bool wide = 2 * region_faces >= nf_;
+  track.wide_rounds = track.fewer_bad_round == round ? 0 : track.wide_rounds + wide;
+  if (current_.bad() == 0 || stagnates(round, track) || stops_halving()) return false;
   widen_rings();
   return true;
+}
+
+bool ParametrizationProblem::Solver::stagnates(int round, const RepairTrack& track) const {
+  if (round - track.best_round >= options_.stagnation_rounds) return true;  // no new best for a while
+  const int count = options_.count_stagnation_rounds, region = options_.region_stagnation_rounds;
+  if (count > 0 && round - track.fewer_bad_round >= count) return true;  // no fewer bad faces for a while
+  return region > 0 && track.wide_rounds >= region;                      // no fewer bad faces over most of the mesh
 }
 
 bool ParametrizationProblem::Solver::stops_halving() const {

@@ -65,6 +65,11 @@ struct ParametrizationSolveOptions {
   int count_stagnation_rounds = 0;             // > 0: also after this many rounds without fewer bad faces
                                                // (for callers with a fallback: a pose only less bad
                                                // rarely becomes regular later)
+  int region_stagnation_rounds = 0;            // > 0: also after this many rounds over a region of at
+                                               // least half the faces since the bad faces last became
+                                               // fewer (each costs about a global solve and they only
+                                               // take turns over the same faces: the global solve in
+                                               // the field's frame follows)
   int halving_rounds = 0;                      // > 0: also once the bad faces have not halved over the
                                                // last this many rounds (a pose that creeps down to a
                                                // plateau of bad faces)

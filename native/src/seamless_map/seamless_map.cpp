@@ -122,6 +122,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   ParametrizationSolveOptions solve_options;
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
+  solve_options.region_stagnation_rounds = options.region_stagnation_rounds;
   solve_options.winding_repair = options.winding_repair;
   ParametrizationSolution solution = problem->solve(solve_options, progress);
 
@@ -146,6 +147,8 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.repair_rounds = s.repair_rounds;
   st.field_frame_solves = s.field_frame_solves;
   st.max_region_faces = s.max_region_faces;
+  st.repair_bad_faces = s.bad_after_round;
+  st.repair_seconds = s.seconds_of_round;
   st.min_area_ratio = s.min_area_ratio;
   st.seconds_cholesky = s.seconds_cholesky;
   st.seconds_ipopt = s.seconds_ipopt;
