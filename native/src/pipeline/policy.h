@@ -40,6 +40,14 @@ constexpr int kMaxWorkingBudgetGrowth = 4;
 // longer than the one the map was solved for (rescaled further, the solver's tolerances no longer
 // match the grid and results drift from a fresh run's).
 constexpr double kMaxSeamlessRescale = 2;
+// The seamless map's local repair pass ends after this many rounds (one turn of its four
+// strategies) over regions of at least half the part without fewer bad triangles; the global solve
+// in the field's frame and a second local pass follow. mnf07 with sharp edges at 60 degrees, 2 000
+// quads: rounds 0-7 brought its bad triangles 92 -> 5, rounds 8-23 stayed at 5-8 over 21 492 of its
+// 22 340 triangles (3-8 s a round), and the global solve then removed them. Rounds over small
+// regions go on (ogre's part 43: a single bad triangle for 7 rounds, then none; under 1 s a round,
+// while the global solve took about 25 s there).
+constexpr int kSeamlessStagnantRounds = 4;
 // Re-quantizations against a folding layout.
 constexpr int kMaxFoldRounds = 8;
 // Symmetry, relative to the bounding-box diagonal: input vertices this close to a plane are moved
