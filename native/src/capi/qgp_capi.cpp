@@ -502,6 +502,8 @@ int qgp_result_uv_fetch(qgp_session* session, double* uv, int32_t* cuts) {
   });
 }
 
+}  // extern "C": the helpers below return C++ types
+
 namespace {
 
 const qgp::UvMesh& uv_mesh_of(qgp_session* session) {
@@ -510,6 +512,8 @@ const qgp::UvMesh& uv_mesh_of(qgp_session* session) {
 }
 
 }  // namespace
+
+extern "C" {
 
 int qgp_result_uv_mesh_counts(qgp_session* session, int64_t* num_vertices, int64_t* num_triangles,
                               int32_t* refined_components) {
@@ -537,6 +541,8 @@ int qgp_result_uv_mesh_fetch(qgp_session* session, double* vertices, int32_t* tr
     return QGP_OK;
   });
 }
+
+}  // extern "C"
 
 namespace {
 
@@ -580,6 +586,8 @@ void atlas_info(const qgp::AtlasFigures& atlas, int32_t* info) {
 }
 
 }  // namespace
+
+extern "C" {
 
 int qgp_atlas_quads(const double* vertices, int64_t num_vertices, const int32_t* quads, int64_t num_quads,
                     int texture_width, int texture_height, int texels_per_quad, int gutter, int mip_levels,

@@ -101,7 +101,7 @@ struct ParametrizationProblem::System {
 ParametrizationProblem::ParametrizationProblem(const TriMesh& mesh, std::vector<int8_t> rotation,
                                                std::vector<char> is_cut, std::vector<Vec3> frame_u, double edge_length,
                                                const std::vector<double>& face_size)
-    : mesh_(mesh), rotation_(std::move(rotation)), is_cut_(std::move(is_cut)), edge_length_(edge_length) {
+    : mesh_(mesh), rotation_(std::move(rotation)), is_cut_(std::move(is_cut)) {
   const int nf = mesh.num_faces(), nc = 3 * nf;
   if (nf == 0 || static_cast<int>(mesh.opposite.size()) != nc)
     throw Error(ErrorCode::InvalidArgument, "parametrization: the mesh has no faces or no connectivity");

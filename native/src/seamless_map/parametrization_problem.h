@@ -165,7 +165,6 @@ class ParametrizationProblem {
   const TriMesh& mesh_;
   std::vector<int8_t> rotation_;
   std::vector<char> is_cut_;  // #E, including rotated edges
-  double edge_length_;
   bool pin_ = true;
   std::vector<int> cone_quarter_turns_;        // #V expected cone angles, or empty
   std::vector<std::pair<int, int>> isolines_;  // (halfedge, axis)

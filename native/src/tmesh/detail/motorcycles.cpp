@@ -598,7 +598,8 @@ void MotorcycleTracer::process(const Event& e) {
     default: {  // HeadOn, Cross
       if (!alive_at(e.a, e.ta) || !alive_at(e.b, e.tb)) return;
       const int node = node_for(e.point);
-      const bool fresh = add_junction(e.a, e.ta, node) | add_junction(e.b, e.tb, node);
+      const bool fresh_a = add_junction(e.a, e.ta, node);  // both junctions, whatever the first gives
+      const bool fresh = add_junction(e.b, e.tb, node) || fresh_a;
       if (e.kind == HeadOn) {
         if (!motos_[e.a].stopped || !motos_[e.b].stopped) ++stats_.head_on;
         if (!motos_[e.a].stopped) stop(e.a, e.ta, node);
