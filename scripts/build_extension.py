@@ -5,7 +5,9 @@ beyond glibc / libstdc++ / libgcc / libm / zlib, found through an $ORIGIN RUNPAT
     dist/<id>-<version>-linux_x64.zip     Blender 4.2+ extension (manifest and __init__.py at the root)
     dist/<id>-<version>-legacy.zip        Blender 3.x add-on (the same files inside a <id>/ folder)
 
-Run after ./scripts/build.sh:  /usr/bin/python3 scripts/build_extension.py [--build DIR]
+Run after ./scripts/build_portable.sh:  /usr/bin/python3 scripts/build_extension.py [--build DIR]
+The default DIR, build-portable/, holds the library that loads on glibc 2.28 and later; --build build
+packages the library of ./scripts/build.sh instead, which loads only where it was built.
 """
 import os
 import re
@@ -58,10 +60,10 @@ def main():
     with open(manifest_path, "rb") as f:
         manifest = tomllib.load(f)
     ident, version = manifest["id"], manifest["version"]
-    build = sys.argv[sys.argv.index("--build") + 1] if "--build" in sys.argv else os.path.join(ROOT, "build")
+    build = sys.argv[sys.argv.index("--build") + 1] if "--build" in sys.argv else os.path.join(ROOT, "build-portable")
     library = os.path.join(build, "lib", "libqgp.so")
     if not os.path.exists(library):
-        sys.exit("build_extension: build/lib/libqgp.so is missing; run ./scripts/build.sh first")
+        sys.exit(f"build_extension: {library} is missing; run ./scripts/build_portable.sh first")
     dist = os.path.join(ROOT, "dist")
     stage = os.path.join(dist, "stage", ident)
     shutil.rmtree(os.path.join(dist, "stage"), ignore_errors=True)

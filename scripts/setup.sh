@@ -13,6 +13,8 @@ PACKAGES=(
   python3-venv                         # scripts/setup_bpy.sh: Blender 4.5 and 5.0 as Python modules
   libopenblas0-serial                  # optimized BLAS for MUMPS (Ipopt) factorizations: about 2x faster
   patchelf zip unzip                   # extension packaging
+  curl patch gfortran libmumps-seq-dev libscotch-dev libopenblas-serial-dev zlib1g-dev libbz2-dev liblzma-dev
+                                       # scripts/build_portable.sh: sources, and the static archives it links
   xvfb xauth                           # a real Blender window for the modal-operator test
   clang-format-14 python3-flake8 python3-clang-14   # code checks (format, Python style, function length)
 )

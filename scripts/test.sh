@@ -2,7 +2,8 @@
 # README command 2: set up, build, and run every test:
 #   0. code checks (cheap, first): function length, C++ format, Python style,
 #   1. the Release build's ctest suite (native GoogleTest, CLI over the mesh set, Blender tests: the
-#      Debian binary 3.4 and PyPI's bpy module 4.5 and 5.0),
+#      Debian binary 3.4 and PyPI's bpy module 4.5 and 5.0). The extension zip and the Blender tests
+#      use the portable library (scripts/build_portable.sh: glibc 2.28 and later), as released,
 #   2. the native and CLI tests built with AddressSanitizer + UndefinedBehaviorSanitizer (every suite
 #      but the long real-mesh sweeps named in SWEEPS, which run in pass 1),
 #   3. the libFuzzer targets for a bounded time from their seed corpora.
@@ -14,7 +15,7 @@ phase() { echo "== $1 (at ${SECONDS} s)"; }  # each phase's start, for what each
 phase "setup: Blender 4.5 and 5.0 modules"
 ./scripts/setup_bpy.sh  # Blender 4.5 and 5.0 as Python modules (PyPI), for the blender_module_* tests
 phase "build (Release)"
-./scripts/build.sh -DQGP_BPY_TESTS=ON
+./scripts/build.sh -DQGP_BPY_TESTS=ON -DQGP_EXTENSION_BUILD="$PWD/build-portable"
 
 phase "code checks"
 /usr/bin/python3 scripts/check_function_length.py --build build
@@ -39,6 +40,9 @@ run_ctest() {  # build dir, extra ctest arguments...
   ctest --test-dir "$dir" --output-on-failure -j2 --timeout "$SWEEP_TIMEOUT" -R "$SWEEPS" "$@"
   ctest --test-dir "$dir" --output-on-failure -j2 --timeout "$TEST_TIMEOUT" -E "$SWEEPS" "$@"
 }
+
+phase "build (portable library for the extension zip)"
+./scripts/build_portable.sh
 
 phase "tests (Release)"
 run_ctest build
