@@ -13,7 +13,7 @@
 #   - The Fortran runtime (MUMPS and LAPACK are Fortran) is the manylinux_2_28 build that scipy's
 #     wheel (pinned) carries; it is bundled next to the library.
 # Each step is skipped when its result exists; delete build-portable/ to start over. Needs the
-# network (deb.debian.org, PyPI) the first time; about 7 minutes on 2 cores.
+# network (deb.debian.org, PyPI) the first time; about 10 minutes on 2 cores (605-633 s measured).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD

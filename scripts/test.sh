@@ -2,8 +2,9 @@
 # README command 2: set up, build, and run every test:
 #   0. code checks (cheap, first): function length, C++ format, Python style,
 #   1. the Release build's ctest suite (native GoogleTest, CLI over the mesh set, Blender tests: the
-#      Debian binary 3.4 and PyPI's bpy module 4.5 and 5.0). The extension zip and the Blender tests
-#      use the portable library (scripts/build_portable.sh: glibc 2.28 and later), as released,
+#      Debian binary 3.4 and PyPI's bpy module 4.5 and 5.0). The extension zips hold the portable
+#      library (scripts/build_portable.sh: glibc 2.28 and later), as released; the zip tests and the
+#      Blender 4.5 / 5.0 tests run it, the rest run the Release build's library,
 #   2. the native and CLI tests built with AddressSanitizer + UndefinedBehaviorSanitizer (every suite
 #      but the long real-mesh sweeps named in SWEEPS, which run in pass 1),
 #   3. the libFuzzer targets for a bounded time from their seed corpora.
