@@ -22,35 +22,11 @@ PREFIX=$OUT/prefix
 SOURCES=$OUT/sources
 TOOLS=$OUT/toolchain
 JOBS=$(nproc)
-DEBIAN=https://deb.debian.org/debian/pool/main
 ZIG_VERSION=0.17.1
 GLIBC_TARGET=x86_64-linux-gnu.2.28
-step() { echo "== build_portable: $1 (at ${SECONDS} s)"; }
-
-fetch() {  # file name, URL, SHA-256: downloads into $SOURCES once and checks the digest
-  local file=$SOURCES/$1
-  if [ ! -f "$file" ]; then
-    curl -fsSL --retry 3 -o "$file.part" "$2"
-    mv "$file.part" "$file"
-  fi
-  echo "$3  $file" | sha256sum --check --quiet || { echo "build_portable: $1: wrong SHA-256" >&2; exit 1; }
-}
-
-unpack() {  # archive file name, folder it makes: unpacks into $SOURCES once
-  [ -d "$SOURCES/$2" ] || tar -xf "$SOURCES/$1" -C "$SOURCES"
-}
-
-apply_debian_patches() {  # source folder, Debian packaging archive: Debian's patches, once
-  [ -f "$1/.debian-patched" ] && return
-  local debian
-  debian=$SOURCES/debian-$(basename "$1")
-  mkdir -p "$debian"
-  tar -xf "$SOURCES/$2" -C "$debian"
-  while read -r patch; do
-    patch -d "$1" -p1 -s <"$debian/debian/patches/$patch"
-  done < <(grep -v '^#' "$debian/debian/patches/series")
-  touch "$1/.debian-patched"
-}
+STEP_LABEL=build_portable
+# shellcheck source=lib/dependency_sources.sh
+source scripts/lib/dependency_sources.sh
 
 toolchain() {  # Zig in .venv-zig and wrappers that fix its target: $TOOLS/{cc,c++,ar,ranlib}
   if ! [ -x .venv-zig/bin/python ] || ! .venv-zig/bin/python -m ziglang version 2>/dev/null | grep -qx "$ZIG_VERSION"; then
@@ -71,10 +47,7 @@ CMAKE_ZIG=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER="$TOOLS/cc" -DCMAKE_CXX
 AUTOTOOLS_ZIG=(CC="$TOOLS/cc" CXX="$TOOLS/c++" AR="$TOOLS/ar" RANLIB="$TOOLS/ranlib")
 
 build_metis() {
-  fetch metis_5.1.0.dfsg.orig.tar.xz "$DEBIAN/m/metis/metis_5.1.0.dfsg.orig.tar.xz" \
-    c50a88b92b01fa3972c5c92cf50117f126c62589b8f793657c7d865c59c23615
-  unpack metis_5.1.0.dfsg.orig.tar.xz metis-5.1.0
-  local src=$SOURCES/metis-5.1.0
+  source_metis
   cmake -S "$src" -B "$OUT/deps/metis" "${CMAKE_ZIG[@]}" -DGKLIB_PATH="$src/GKlib" -DSHARED=OFF >/dev/null
   cmake --build "$OUT/deps/metis" -j"$JOBS" --target metis >/dev/null
   cp "$OUT/deps/metis/libmetis/libmetis.a" "$PREFIX/lib/"
@@ -82,16 +55,7 @@ build_metis() {
 }
 
 build_gmp() {
-  fetch gmp_6.2.1+dfsg1.orig.tar.xz "$DEBIAN/g/gmp/gmp_6.2.1+dfsg1.orig.tar.xz" \
-    471b9e463e04362a0124f215afc5f0a4b99caedeeb62634c61bbc12988efa64c
-  fetch gmp_6.2.1+dfsg1-1.1.debian.tar.xz "$DEBIAN/g/gmp/gmp_6.2.1+dfsg1-1.1.debian.tar.xz" \
-    4e3e324d72fe688e409c716d33b35aa8657f6016cc1aabd5d9c7ec137412e5ef
-  unpack gmp_6.2.1+dfsg1.orig.tar.xz gmp-6.2.1
-  local src=$SOURCES/gmp-6.2.1
-  apply_debian_patches "$src" gmp_6.2.1+dfsg1-1.1.debian.tar.xz
-  # Debian's source has no doc/ (GFDL); build the library folders only.
-  sed -i 's|^SUBDIRS = tests mpn mpz mpq mpf printf scanf rand cxx demos tune doc$|SUBDIRS = mpn mpz mpq mpf printf scanf rand cxx|' "$src/Makefile.in"
-  sed -i 's| doc/Makefile | |' "$src/configure"
+  source_gmp
   mkdir -p "$OUT/deps/gmp"
   # Generic x86-64 code (no host CPU detection), position-independent, with gmpxx.h for libc++.
   (cd "$OUT/deps/gmp" && env "${AUTOTOOLS_ZIG[@]}" CFLAGS="-O2 -fPIC" CXXFLAGS="-O2 -fPIC" "$src/configure" \
@@ -100,37 +64,24 @@ build_gmp() {
 }
 
 build_suitesparse() {
-  fetch suitesparse_5.12.0+dfsg.orig.tar.xz "$DEBIAN/s/suitesparse/suitesparse_5.12.0+dfsg.orig.tar.xz" \
-    bb106c43049138c19675cd70322e72ff8e4fd8bdcab3a096307fd78488913faf
-  [ -d "$SOURCES/SuiteSparse-5.12.0" ] || tar -xf "$SOURCES/suitesparse_5.12.0+dfsg.orig.tar.xz" -C "$SOURCES" \
-    --wildcards '*/SuiteSparse_config/*' '*/AMD/*' '*/CAMD/*' '*/COLAMD/*' '*/CCOLAMD/*' '*/CHOLMOD/*'
+  source_suitesparse
   cmake -S cmake/portable/suitesparse -B "$OUT/deps/suitesparse" "${CMAKE_ZIG[@]}" \
-    -DSUITESPARSE_DIR="$SOURCES/SuiteSparse-5.12.0" -DMETIS_INCLUDE_DIR="$PREFIX/include" \
+    -DSUITESPARSE_DIR="$src" -DMETIS_INCLUDE_DIR="$PREFIX/include" \
     -DCMAKE_INSTALL_PREFIX="$PREFIX" >/dev/null
   cmake --build "$OUT/deps/suitesparse" -j"$JOBS" >/dev/null
   cmake --install "$OUT/deps/suitesparse" >/dev/null
 }
 
 build_openmesh() {
-  fetch openmesh_9.0.orig.tar.gz "$DEBIAN/o/openmesh/openmesh_9.0.orig.tar.gz" \
-    4df84295f5cca86b1ae8bfee8ff4db5efb6850e4e5b571ad0199147176dea796
-  unpack openmesh_9.0.orig.tar.gz OpenMesh-9.0.0
-  local src=$SOURCES/OpenMesh-9.0.0
+  source_openmesh
   cmake -S "$src" -B "$OUT/deps/openmesh" "${CMAKE_ZIG[@]}" -DBUILD_APPS=OFF -DOPENMESH_DOCS=OFF >/dev/null
   cmake --build "$OUT/deps/openmesh" -j"$JOBS" --target OpenMeshCoreStatic >/dev/null
-  find "$OUT/deps/openmesh" -name 'libOpenMesh*.a' -exec cp {} "$PREFIX/lib/" \;
-  # The headers, with the template definitions (.cc) they include.
-  (cd "$src/src" && find OpenMesh \( -name '*.hh' -o -name '*.cc' \) -exec cp --parents {} "$PREFIX/include/" \;)
+  install_openmesh "$OUT/deps/openmesh"
 }
 
 build_ipopt() {
-  fetch coinor-ipopt_3.11.9.orig.tar.gz "$DEBIAN/c/coinor-ipopt/coinor-ipopt_3.11.9.orig.tar.gz" \
-    84991b13ce22e4a4aa0756a5db290c2b811bf82ff4e9124d1a71867118e6ab2d
-  fetch coinor-ipopt_3.11.9-2.3.debian.tar.xz "$DEBIAN/c/coinor-ipopt/coinor-ipopt_3.11.9-2.3.debian.tar.xz" \
-    ffbb7a4b2295af0d183f31d440483118b7a49871df9626cd3b12f29aca445b6b
-  unpack coinor-ipopt_3.11.9.orig.tar.gz Ipopt-3.11.9
-  local src=$SOURCES/Ipopt-3.11.9 lib=/usr/lib/x86_64-linux-gnu
-  apply_debian_patches "$src" coinor-ipopt_3.11.9-2.3.debian.tar.xz
+  source_ipopt
+  local lib=/usr/lib/x86_64-linux-gnu
   # Debian's MUMPS headers in a folder of their own: -I/usr/include would put glibc 2.36's headers
   # ahead of Zig's.
   mkdir -p "$PREFIX/include/mumps"
@@ -160,14 +111,6 @@ build_fortran_runtime() {  # libgfortran and libquadmath of scipy 1.17.1's manyl
   unzip -o -q -j "$SOURCES/$wheel" 'scipy.libs/libgfortran-8f1e9814.so.5.0.0' \
     'scipy.libs/libquadmath-828275a7.so.0.0.0' -d "$PREFIX/lib"
   patchelf --set-rpath '$ORIGIN' "$PREFIX/lib/libgfortran-8f1e9814.so.5.0.0"  # finds libquadmath beside it
-}
-
-build_dependency() {  # name: runs build_<name> once (a stamp in the prefix records it)
-  if [ ! -f "$PREFIX/.built-$1" ]; then
-    step "$1"
-    "build_$1"
-    touch "$PREFIX/.built-$1"
-  fi
 }
 
 mkdir -p "$SOURCES" "$PREFIX/lib" "$PREFIX/include"

@@ -62,8 +62,8 @@ struct PipelineRunning {
 void fatal_signal(int sig) {
   const char* what = sig == SIGSEGV   ? "crashed (SIGSEGV)"
                      : sig == SIGABRT ? "aborted (SIGABRT)"
-                     : sig == SIGBUS  ? "crashed (SIGBUS)"
-                                      : "crashed (SIGFPE)";
+                     : sig == SIGFPE  ? "crashed (SIGFPE)"
+                                      : "crashed (SIGBUS)";
   write_stderr("qgp: internal error: ");
   write_stderr(what);
   write_stderr("; no output was written\n");
@@ -73,11 +73,15 @@ void fatal_signal(int sig) {
 
 void report_abnormal_ends() {
   std::atexit(exit_during_pipeline);
+#ifdef _WIN32
+  for (int sig : {SIGSEGV, SIGABRT, SIGFPE}) signal(sig, fatal_signal);  // Windows has no SIGBUS, no sigaction
+#else
   struct sigaction action {};
   action.sa_handler = fatal_signal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESETHAND;
   for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE}) sigaction(sig, &action, nullptr);
+#endif
 }
 
 struct CommandLine {
@@ -186,6 +190,7 @@ void add_commands(CLI::App& app, CommandLine& cl) {
 // and the usage on stderr), returns false and sets *exit_code.
 bool parse(int argc, char** argv, CommandLine* cl, int* exit_code) {
   CLI::App app("qgp: quad meshes and integer-grid maps from triangle meshes (Quantized Global Parametrization)", "qgp");
+  app.allow_windows_style_options(false);  // on Windows too: /path/to/mesh.obj is a path, not an option
   add_commands(app, *cl);
   try {
     app.parse(argc, argv);

@@ -18,7 +18,13 @@
 extern "C" {
 #endif
 
+#if defined(_WIN32) && defined(QGP_BUILDING_LIBRARY)
+#define QGP_API __declspec(dllexport) /* qgp.dll exports these and nothing else */
+#elif defined(_WIN32)
+#define QGP_API
+#else
 #define QGP_API __attribute__((visibility("default")))
+#endif
 
 typedef struct qgp_session qgp_session;
 
