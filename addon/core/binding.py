@@ -7,6 +7,7 @@ Every native failure raises QGPError carrying the native status code and message
 import ctypes
 import json
 import os
+import sys
 
 import numpy as np
 
@@ -25,7 +26,7 @@ ERR_NOT_READY = 9
 JOB_INTAKE, JOB_REMESH, JOB_GRID_UV = 0, 1, 2
 STATE_IDLE, STATE_RUNNING, STATE_DONE, STATE_FAILED, STATE_CANCELLED = 0, 1, 2, 3, 4
 
-LIBRARY_NAME = "libqgp.so"
+LIBRARY_NAME = "qgp.dll" if sys.platform == "win32" else "libqgp.so"  # the windows-x64 zip holds qgp.dll
 
 
 class QGPError(Exception):
@@ -38,7 +39,7 @@ class QGPError(Exception):
 
 
 def library_candidates():
-    """Where libqgp.so is looked for, in order."""
+    """Where the native library (libqgp.so, or qgp.dll on Windows) is looked for, in order."""
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the add-on folder
     paths = []
     if os.environ.get("QGP_LIBRARY"):

@@ -3,12 +3,15 @@
 A fault inside the native code or a library under it (a segfault, MUMPS calling abort) ends the
 child, not Blender: the call that was waiting on it raises QGPError naming the signal and the
 child's last output. WorkerSession has binding.Session's interface; requests and answers are
-pickled over a socket pair. Run as a script, this file is the child: it serves one session. The
+pickled over a socket pair (on Windows, which cannot hand a socket to a child process, over a
+loopback connection the child makes back, proven by a one-time token). Run as a script, this file
+is the child: it serves one session. The
 child's interpreter runs isolated from the user's Python setup (-I, no PYTHON* variables) and writes
 no bytecode (-B), so nothing lands in the add-on's folder.
 """
 import os
 import pickle
+import secrets
 import signal
 import socket
 import struct
@@ -69,39 +72,73 @@ def child_environment():
     return env
 
 
-def child_command(fd):
+def child_command(*channel):
     """The child's command line: isolated mode (-I: no PYTHON* variables, no user site-packages, no
-    script folder on sys.path) and no bytecode written (-B: no __pycache__ in the add-on's folder)."""
-    return [python_executable(), "-I", "-B", os.path.abspath(__file__), str(fd)]
+    script folder on sys.path) and no bytecode written (-B: no __pycache__ in the add-on's folder),
+    then how it reaches the parent: an inherited socket's fd, or "--connect PORT TOKEN"."""
+    return [python_executable(), "-I", "-B", os.path.abspath(__file__)] + [str(part) for part in channel]
 
 
 def python_executable():
     """The interpreter Blender embeds (same version and packages), not whatever `python` is on PATH."""
-    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    names = ("python.exe",) if os.name == "nt" else (f"python{sys.version_info.major}.{sys.version_info.minor}",)
     for prefix in (sys.prefix, sys.base_prefix):
-        candidate = os.path.join(prefix, "bin", version)
-        if os.access(candidate, os.X_OK):
-            return candidate
+        for name in names:
+            candidate = os.path.join(prefix, "bin", name)
+            if os.access(candidate, os.X_OK):
+                return candidate
     return sys.executable
+
+
+# Seconds the parent waits for the child to connect back (a loopback channel): the child's
+# interpreter start and the library load come first.
+CONNECT_TIMEOUT = 60
+
+
+def start_child(log, loopback):
+    """Starts the child process; returns it and the parent's end of the channel. loopback: the child
+    connects to a listening socket on 127.0.0.1 and sends a one-time token first (Windows: no socket
+    passing); otherwise the child inherits one end of a socket pair."""
+    options = dict(stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, env=child_environment())
+    if not loopback:
+        parent, child = socket.socketpair()
+        try:
+            process = subprocess.Popen(child_command(child.fileno()), pass_fds=(child.fileno(),), close_fds=True,
+                                       **options)
+        except OSError:
+            parent.close()
+            raise
+        finally:
+            child.close()
+        return process, parent
+    token = secrets.token_hex(16)
+    with socket.create_server(("127.0.0.1", 0)) as listener:
+        listener.settimeout(CONNECT_TIMEOUT)
+        process = subprocess.Popen(child_command("--connect", listener.getsockname()[1], token), **options)
+        try:
+            parent, _ = listener.accept()
+            parent.settimeout(None)
+            if _Channel(parent)._read(len(token)).decode(errors="replace") != token:
+                parent.close()
+                raise OSError("a process other than the worker connected to it")
+        except (OSError, EOFError) as e:
+            process.kill()
+            process.wait()
+            raise OSError(f"the worker did not connect back ({e})")
+    return process, parent
 
 
 class WorkerSession(binding.SessionLifetime):
     """A binding.Session living in its own process. Use as a context manager or call close()."""
 
-    def __init__(self, vertices, triangles):
+    def __init__(self, vertices, triangles, loopback=os.name == "nt"):
         self._process = None
         self._conn = None
         self._log = tempfile.TemporaryFile()
-        parent, child = socket.socketpair()
         try:
-            self._process = subprocess.Popen(
-                child_command(child.fileno()), pass_fds=(child.fileno(),), stdin=subprocess.DEVNULL,
-                stdout=self._log, stderr=subprocess.STDOUT, env=child_environment(), close_fds=True)
+            self._process, parent = start_child(self._log, loopback)
         except OSError as e:
-            parent.close()
             raise WorkerStartError(binding.ERR_INTERNAL, f"cannot start the worker process: {e}")
-        finally:
-            child.close()
         self._conn = _Channel(parent)
         try:
             self._call("version")
@@ -219,9 +256,18 @@ class WorkerSession(binding.SessionLifetime):
         return self._call("layout_lines")
 
 
-def serve(fd):
+def connect_to_parent(argv):
+    """The child's end of the channel, from its command line (see child_command)."""
+    if argv[0] == "--connect":
+        sock = socket.create_connection(("127.0.0.1", int(argv[1])))
+        sock.sendall(argv[2].encode())
+        return sock
+    return socket.socket(fileno=int(argv[0]))
+
+
+def serve(sock):
     """The child's loop: one session, requests until "close" or the parent goes away."""
-    conn = _Channel(socket.socket(fileno=fd))
+    conn = _Channel(sock)
     session = None
     try:
         while True:
@@ -256,4 +302,4 @@ if __name__ == "__main__":
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a crash leaves no core file in the user's folder
     except (ImportError, ValueError, OSError):
         pass
-    serve(int(sys.argv[1]))
+    serve(connect_to_parent(sys.argv[1:]))

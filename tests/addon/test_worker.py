@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """The add-on's worker process (addon/core/worker.py), outside Blender:
-a remesh in the worker gives exactly the in-process result; native errors keep their code and
+a remesh in the worker gives exactly the in-process result, over a socket pair and over the loopback
+connection Windows uses; native errors keep their code and
 message; a worker killed mid-job (SIGKILL, SIGSEGV) is an error naming the signal and the session
 reports itself dead; closing during a job ends the child; a worker that cannot start is a
 WorkerStartError; the child is isolated from the user's PYTHON* variables (a PYTHONPATH with
@@ -47,15 +48,21 @@ def same_result_as_in_process(meshes):
     for name, target in (("bunny.off", 800), ("joint.obj", 500), ("face.obj", 600)):
         vertices, triangles = load(meshes, name)
         results = []
-        for make in (binding.Session, worker.WorkerSession):
+        # The worker over a socket pair (Linux, macOS) and over a loopback connection (Windows).
+        for make in (binding.Session, worker.WorkerSession, loopback_worker):
             with make(vertices, triangles) as session:
                 session.set_option("target_faces", target)
                 session.run(binding.JOB_REMESH)
                 v, q, src = session.quad_mesh()
                 results.append((v, q, src, session.report()["quad"]["faces"]))
-        (v0, q0, s0, n0), (v1, q1, s1, n1) = results
-        check(n0 == n1 == len(q1) and np.array_equal(q0, q1) and np.array_equal(s0, s1) and np.array_equal(v0, v1),
-              f"{name}: the worker's {len(q1)} quads are the in-process result")
+        (v0, q0, s0, n0) = results[0]
+        for transport, (v1, q1, s1, n1) in zip(("socket pair", "loopback"), results[1:]):
+            check(n0 == n1 == len(q1) and np.array_equal(q0, q1) and np.array_equal(s0, s1) and np.array_equal(v0, v1),
+                  f"{name}: the worker's {len(q1)} quads ({transport}) are the in-process result")
+
+
+def loopback_worker(vertices, triangles):
+    return worker.WorkerSession(vertices, triangles, loopback=True)
 
 
 def native_errors_pass_through():
@@ -68,9 +75,9 @@ def native_errors_pass_through():
                   f"native error keeps its code and message, worker alive: {e.message[:60]}")
 
 
-def killed_mid_job(meshes, sig):
+def killed_mid_job(meshes, sig, loopback=False):
     vertices, triangles = load(meshes, "armadillo.obj")
-    session = worker.WorkerSession(vertices, triangles)
+    session = worker.WorkerSession(vertices, triangles, loopback=loopback)
     session.start(binding.JOB_REMESH)
     time.sleep(1.0)
     state = session.poll()[0]
@@ -182,6 +189,7 @@ def main():
     native_errors_pass_through()
     for sig in (signal.SIGKILL, signal.SIGSEGV):
         killed_mid_job(args.meshes, sig)
+    killed_mid_job(args.meshes, signal.SIGKILL, loopback=True)
     close_during_job_ends_child(args.meshes)
     start_failure()
     isolated_from_python_environment(args.meshes)
