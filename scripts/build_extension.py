@@ -1,13 +1,21 @@
 #!/usr/bin/python3
-"""Stages the add-on, the manifest and the native library (with every shared library it needs
-beyond glibc / libstdc++ / libgcc / libm / zlib, found through an $ORIGIN RUNPATH) into
+"""Stages the add-on, the manifest and the native library into
 
-    dist/<id>-<version>-linux_x64.zip     Blender 4.2+ extension (manifest and __init__.py at the root)
-    dist/<id>-<version>-legacy.zip        Blender 3.x add-on (the same files inside a <id>/ folder)
+    dist/<id>-<version>-linux_x64.zip            Blender 4.2+ extension (manifest and __init__.py at the root)
+    dist/<id>-<version>-legacy.zip               Blender 3.x add-on (the same files inside a <id>/ folder)
 
-Run after ./scripts/build_portable.sh:  /usr/bin/python3 scripts/build_extension.py [--build DIR]
-The default DIR, build-portable/, holds the library that loads on glibc 2.28 and later; --build build
-packages the library of ./scripts/build.sh instead, which loads only where it was built.
+or, with --platform windows-x64,
+
+    dist/<id>-<version>-windows_x64.zip          Blender 4.2+ extension
+    dist/<id>-<version>-legacy_windows_x64.zip   Blender 3.x add-on
+
+Each zip's manifest lists its one platform. Linux: run after ./scripts/build_portable.sh
+  /usr/bin/python3 scripts/build_extension.py [--build DIR]
+The default DIR, build-portable/, holds the library that loads on glibc 2.28 and later (with every
+shared library it needs beyond glibc / libstdc++ / libgcc / libm / zlib, found through an $ORIGIN
+RUNPATH); --build build packages the library of ./scripts/build.sh instead, which loads only where it
+was built. Windows: run after ./scripts/build_windows.sh (the default DIR is build-windows/; qgp.dll
+needs no DLL beyond Windows' own).
 """
 import os
 import re
@@ -55,36 +63,69 @@ def bundle_libraries(library, lib_dir):
     return sorted(bundled)
 
 
+# Per platform: the default build folder, the library in it, the zip names' platform part.
+PLATFORMS = {
+    "linux-x64": ("build-portable", os.path.join("lib", "libqgp.so"), "linux_x64"),
+    "windows-x64": ("build-windows", os.path.join("bin", "qgp.dll"), "windows_x64"),
+}
+
+
+def option(name, default):
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
+def stage_manifest(manifest_path, platform, target):
+    """The manifest with `platforms` naming only the zip's own platform."""
+    with open(manifest_path) as f:
+        text = f.read()
+    text, count = re.subn(r"(?m)^platforms = \[.*\]$", f'platforms = ["{platform}"]', text)
+    if count != 1:
+        sys.exit(f"build_extension: {manifest_path}: no single `platforms = [...]` line")
+    with open(target, "w") as f:
+        f.write(text)
+
+
+def write_zips(stage, ident, names):
+    files = []
+    for folder, _, entries in os.walk(stage):
+        for name in sorted(entries):
+            full = os.path.join(folder, name)
+            files.append((full, os.path.relpath(full, stage)))
+    for path, prefix in zip(names, ("", ident + "/")):
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+            for full, rel in files:
+                z.write(full, prefix + rel)
+        print(f"build_extension: {path}")
+
+
 def main():
     manifest_path = os.path.join(ROOT, "blender_manifest.toml")
     with open(manifest_path, "rb") as f:
         manifest = tomllib.load(f)
     ident, version = manifest["id"], manifest["version"]
-    build = sys.argv[sys.argv.index("--build") + 1] if "--build" in sys.argv else os.path.join(ROOT, "build-portable")
-    library = os.path.join(build, "lib", "libqgp.so")
+    platform = option("--platform", "linux-x64")
+    if platform not in PLATFORMS:
+        sys.exit(f"build_extension: --platform must be one of {', '.join(PLATFORMS)}")
+    default_build, library_path, zip_platform = PLATFORMS[platform]
+    library = os.path.join(option("--build", os.path.join(ROOT, default_build)), library_path)
     if not os.path.exists(library):
-        sys.exit(f"build_extension: {library} is missing; run ./scripts/build_portable.sh first")
+        script = "build_windows.sh" if platform == "windows-x64" else "build_portable.sh"
+        sys.exit(f"build_extension: {library} is missing; run ./scripts/{script} first")
     dist = os.path.join(ROOT, "dist")
-    stage = os.path.join(dist, "stage", ident)
-    shutil.rmtree(os.path.join(dist, "stage"), ignore_errors=True)
+    stage = os.path.join(dist, f"stage-{platform}", ident)  # one per platform: both may be built at once
+    shutil.rmtree(os.path.dirname(stage), ignore_errors=True)
     shutil.copytree(os.path.join(ROOT, "addon"), stage,
                     ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
-    shutil.copy2(manifest_path, os.path.join(stage, "blender_manifest.toml"))
-    bundled = bundle_libraries(library, os.path.join(stage, "lib"))
-
-    files = []
-    for folder, _, names in os.walk(stage):
-        for name in sorted(names):
-            full = os.path.join(folder, name)
-            files.append((full, os.path.relpath(full, stage)))
-    extension_zip = os.path.join(dist, f"{ident}-{version}-linux_x64.zip")
-    legacy_zip = os.path.join(dist, f"{ident}-{version}-legacy.zip")
-    for path, prefix in ((extension_zip, ""), (legacy_zip, ident + "/")):
-        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-            for full, rel in files:
-                z.write(full, prefix + rel)
-    print(f"build_extension: {extension_zip}")
-    print(f"build_extension: {legacy_zip}")
+    stage_manifest(manifest_path, platform, os.path.join(stage, "blender_manifest.toml"))
+    if platform == "windows-x64":
+        os.makedirs(os.path.join(stage, "lib"))
+        shutil.copy2(library, os.path.join(stage, "lib", "qgp.dll"))
+        bundled = []
+    else:
+        bundled = bundle_libraries(library, os.path.join(stage, "lib"))
+    legacy = "legacy" if platform == "linux-x64" else f"legacy_{zip_platform}"
+    write_zips(stage, ident, [os.path.join(dist, f"{ident}-{version}-{zip_platform}.zip"),
+                              os.path.join(dist, f"{ident}-{version}-{legacy}.zip")])
     print(f"build_extension: bundled {len(bundled)} libraries: {' '.join(bundled)}")
 
 

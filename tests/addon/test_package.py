@@ -49,7 +49,10 @@ def main():
     check(len(manifest["tagline"]) <= 64 and manifest["tagline"][-1] not in ".!?,;:",
           "tagline: <= 64 chars, no trailing punctuation")
     check(all(entry.startswith("SPDX:") for entry in manifest["license"]), "license entries must be SPDX:...")
-    check(manifest.get("platforms") == ["linux-x64"], "platforms must list linux-x64 (native library inside)")
+    check(manifest.get("platforms") == ["linux-x64", "windows-x64"], "platforms must list the zips that exist")
+    with zipfile.ZipFile(ext_zip) as z:
+        zip_manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+    check(zip_manifest.get("platforms") == ["linux-x64"], "the linux zip's manifest must list linux-x64 alone")
     check(re.fullmatch(r"[a-z][a-z0-9_]*", ident) is not None, "id must be a Python identifier")
     for key, value in manifest.get("permissions", {}).items():
         check(isinstance(value, str) and value and value[-1] not in ".",
