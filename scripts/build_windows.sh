@@ -111,7 +111,8 @@ OPTF = -O2 -fallow-argument-mismatch
 OPTC = -O2
 OPTL = -O2
 MAKE
-  make -C "$build" -j1 d >/dev/null  # MUMPS' Makefiles are not parallel-safe
+  make -C "$build" -j"$JOBS" prerequisites >/dev/null  # libseq and PORD
+  make -C "$build/src" -j"$JOBS" d >/dev/null  # the libraries without the examples
   cp "$build"/lib/libdmumps.a "$build"/lib/libmumps_common.a "$build"/PORD/lib/libpord.a \
     "$build"/libseq/libmpiseq.a "$PREFIX/lib/"
   mkdir -p "$PREFIX/include/mumps"
