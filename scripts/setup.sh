@@ -15,6 +15,8 @@ PACKAGES=(
   patchelf zip unzip                   # extension packaging
   curl patch gfortran libmumps-seq-dev libscotch-dev libopenblas-serial-dev zlib1g-dev libbz2-dev liblzma-dev
                                        # scripts/build_portable.sh: sources, and the static archives it links
+  g++-mingw-w64-x86-64-posix gfortran-mingw-w64-x86-64-posix wine wine64
+                                       # scripts/build_windows.sh (Windows x64 cross-build) and its test under Wine
   xvfb xauth                           # a real Blender window for the modal-operator test
   clang-format-14 python3-flake8 python3-clang-14   # code checks (format, Python style, function length)
 )
