@@ -15,8 +15,9 @@ find_package(Threads REQUIRED)
 
 set(_debian_lib /usr/lib/x86_64-linux-gnu)
 set(_prefix_lib ${QGP_PORTABLE_PREFIX}/lib)
-# In link order; one group, since MUMPS, SCOTCH and the BLAS refer to one another.
-set(_static_archives
+# In link order.
+include(${CMAKE_CURRENT_LIST_DIR}/static_archive_group.cmake)
+qgp_static_archive_group(_archive_group "run scripts/setup.sh and scripts/build_portable.sh"
   ${_prefix_lib}/libOpenMeshCore.a ${_prefix_lib}/libipopt.a
   ${_debian_lib}/libdmumps_seq.a ${_debian_lib}/libmumps_common_seq.a ${_debian_lib}/libpord_seq.a
   ${_debian_lib}/libmpiseq_seq.a ${_debian_lib}/libesmumps.a ${_debian_lib}/libscotch.a
@@ -31,12 +32,6 @@ list(LENGTH _fortran_runtime _fortran_runtime_count)
 if(NOT _fortran_runtime_count EQUAL 2)
   message(FATAL_ERROR "expected one libgfortran and one libquadmath in ${_prefix_lib}: ${_fortran_runtime}")
 endif()
-foreach(archive IN LISTS _static_archives)
-  if(NOT EXISTS "${archive}")
-    message(FATAL_ERROR "static archive missing: ${archive} (run scripts/setup.sh and scripts/build_portable.sh)")
-  endif()
-endforeach()
-string(REPLACE ";" " " _archives_text "${_static_archives}")
 
 add_library(qgp_dependencies INTERFACE)
 target_include_directories(qgp_dependencies SYSTEM INTERFACE
@@ -44,4 +39,4 @@ target_include_directories(qgp_dependencies SYSTEM INTERFACE
 target_compile_definitions(qgp_dependencies INTERFACE HAVE_CSTDDEF)
 target_link_options(qgp_dependencies INTERFACE -Wl,--strip-debug)  # 115 MB with the archives' debug info
 target_link_libraries(qgp_dependencies INTERFACE Eigen3::Eigen
-  "-Wl,--start-group ${_archives_text} -Wl,--end-group" ${_fortran_runtime} m dl Threads::Threads)
+  "${_archive_group}" ${_fortran_runtime} m dl Threads::Threads)

@@ -4,18 +4,13 @@
 # beyond Windows' own. Defines the interface target qgp_dependencies (and the CLI's PNG).
 set(QGP_WINDOWS_PREFIX "" CACHE PATH "Cross-built static dependencies (scripts/build_windows.sh)")
 set(_prefix_lib ${QGP_WINDOWS_PREFIX}/lib)
-# In link order; one group, since MUMPS, METIS and the BLAS refer to one another.
-set(_static_archives
+# In link order.
+include(${CMAKE_CURRENT_LIST_DIR}/static_archive_group.cmake)
+qgp_static_archive_group(_archive_group "run scripts/build_windows.sh"
   ${_prefix_lib}/libOpenMeshCore.a ${_prefix_lib}/libipopt.a ${_prefix_lib}/libdmumps.a
   ${_prefix_lib}/libmumps_common.a ${_prefix_lib}/libpord.a ${_prefix_lib}/libmpiseq.a
   ${_prefix_lib}/libcholmod.a ${_prefix_lib}/libmetis.a ${_prefix_lib}/liblapack.a
   ${_prefix_lib}/libblas.a ${_prefix_lib}/libgmpxx.a ${_prefix_lib}/libgmp.a)
-foreach(archive IN LISTS _static_archives)
-  if(NOT EXISTS "${archive}")
-    message(FATAL_ERROR "static archive missing: ${archive} (run scripts/build_windows.sh)")
-  endif()
-endforeach()
-string(REPLACE ";" " " _archives_text "${_static_archives}")
 
 add_library(qgp_dependencies INTERFACE)
 # Eigen is header-only; its folder holds nothing else (/usr/include itself must not be seen).
@@ -24,7 +19,7 @@ target_include_directories(qgp_dependencies SYSTEM INTERFACE /usr/include/eigen3
 target_compile_definitions(qgp_dependencies INTERFACE HAVE_CSTDDEF)
 target_link_options(qgp_dependencies INTERFACE -static -static-libgcc -static-libstdc++)
 target_link_libraries(qgp_dependencies INTERFACE
-  "-Wl,--start-group ${_archives_text} -Wl,--end-group" -lgfortran -lquadmath -lpthread)
+  "${_archive_group}" -lgfortran -lquadmath -lpthread)
 
 add_library(qgp_png INTERFACE)  # the CLI's `qgp stitch`
 target_link_libraries(qgp_png INTERFACE ${_prefix_lib}/libpng16.a ${_prefix_lib}/libz.a)

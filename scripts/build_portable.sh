@@ -48,10 +48,7 @@ AUTOTOOLS_ZIG=(CC="$TOOLS/cc" CXX="$TOOLS/c++" AR="$TOOLS/ar" RANLIB="$TOOLS/ran
 
 build_metis() {
   source_metis
-  cmake -S "$src" -B "$OUT/deps/metis" "${CMAKE_ZIG[@]}" -DGKLIB_PATH="$src/GKlib" -DSHARED=OFF >/dev/null
-  cmake --build "$OUT/deps/metis" -j"$JOBS" --target metis >/dev/null
-  cp "$OUT/deps/metis/libmetis/libmetis.a" "$PREFIX/lib/"
-  cp "$src/include/metis.h" "$PREFIX/include/"
+  cmake_metis "${CMAKE_ZIG[@]}"
 }
 
 build_gmp() {
@@ -65,11 +62,7 @@ build_gmp() {
 
 build_suitesparse() {
   source_suitesparse
-  cmake -S cmake/portable/suitesparse -B "$OUT/deps/suitesparse" "${CMAKE_ZIG[@]}" \
-    -DSUITESPARSE_DIR="$src" -DMETIS_INCLUDE_DIR="$PREFIX/include" \
-    -DCMAKE_INSTALL_PREFIX="$PREFIX" >/dev/null
-  cmake --build "$OUT/deps/suitesparse" -j"$JOBS" >/dev/null
-  cmake --install "$OUT/deps/suitesparse" >/dev/null
+  cmake_suitesparse "${CMAKE_ZIG[@]}"
 }
 
 build_openmesh() {

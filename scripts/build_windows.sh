@@ -35,10 +35,7 @@ build_metis() {
   sed -i 's/int __argc, char \*\*__argv/int argc_, char **argv_/' "$src/GKlib/gk_getopt.h"
   # GKlib includes <sys/resource.h> on every compiler but MSVC; mingw has none (nor needs it).
   sed -i 's|^  #include <sys/resource.h>$|  #ifndef __MINGW32__\n  #include <sys/resource.h>\n  #endif|' "$src/GKlib/gk_arch.h"
-  cmake -S "$src" -B "$OUT/deps/metis" "${CMAKE_MINGW[@]}" -DGKLIB_PATH="$src/GKlib" -DSHARED=OFF >/dev/null
-  cmake --build "$OUT/deps/metis" -j"$JOBS" --target metis >/dev/null
-  cp "$OUT/deps/metis/libmetis/libmetis.a" "$PREFIX/lib/"
-  cp "$src/include/metis.h" "$PREFIX/include/"
+  cmake_metis "${CMAKE_MINGW[@]}"
 }
 
 build_gmp() {
@@ -51,10 +48,7 @@ build_gmp() {
 
 build_suitesparse() {
   source_suitesparse
-  cmake -S cmake/portable/suitesparse -B "$OUT/deps/suitesparse" "${CMAKE_MINGW[@]}" \
-    -DSUITESPARSE_DIR="$src" -DMETIS_INCLUDE_DIR="$PREFIX/include" >/dev/null
-  cmake --build "$OUT/deps/suitesparse" -j"$JOBS" >/dev/null
-  cmake --install "$OUT/deps/suitesparse" >/dev/null
+  cmake_suitesparse "${CMAKE_MINGW[@]}"
 }
 
 build_openmesh() {

@@ -1,6 +1,7 @@
 # Sourced by build_portable.sh and build_windows.sh: Debian bookworm's sources of the native
 # dependencies, pinned by SHA-256, fetched, unpacked and patched once into $SOURCES, and the
-# helpers that run each dependency's build once. The caller sets SOURCES, PREFIX and STEP_LABEL.
+# helpers that run each dependency's build once. The caller sets SOURCES, PREFIX, OUT, JOBS and
+# STEP_LABEL.
 # shellcheck shell=bash
 DEBIAN=https://deb.debian.org/debian/pool/main
 
@@ -47,6 +48,13 @@ source_metis() {
   src=$SOURCES/metis-5.1.0
 }
 
+cmake_metis() {  # CMake arguments (the toolchain)...: METIS from $src, into $PREFIX
+  cmake -S "$src" -B "$OUT/deps/metis" "$@" -DGKLIB_PATH="$src/GKlib" -DSHARED=OFF >/dev/null
+  cmake --build "$OUT/deps/metis" -j"$JOBS" --target metis >/dev/null
+  cp "$OUT/deps/metis/libmetis/libmetis.a" "$PREFIX/lib/"
+  cp "$src/include/metis.h" "$PREFIX/include/"
+}
+
 source_gmp() {
   fetch gmp_6.2.1+dfsg1.orig.tar.xz "$DEBIAN/g/gmp/gmp_6.2.1+dfsg1.orig.tar.xz" \
     471b9e463e04362a0124f215afc5f0a4b99caedeeb62634c61bbc12988efa64c
@@ -66,6 +74,13 @@ source_suitesparse() {  # only the parts CHOLMOD needs (cmake/portable/suitespar
   [ -d "$SOURCES/SuiteSparse-5.12.0" ] || tar -xf "$SOURCES/suitesparse_5.12.0+dfsg.orig.tar.xz" -C "$SOURCES" \
     --wildcards '*/SuiteSparse_config/*' '*/AMD/*' '*/CAMD/*' '*/COLAMD/*' '*/CCOLAMD/*' '*/CHOLMOD/*'
   src=$SOURCES/SuiteSparse-5.12.0
+}
+
+cmake_suitesparse() {  # CMake arguments (the toolchain)...: CHOLMOD from $src, into $PREFIX
+  cmake -S cmake/portable/suitesparse -B "$OUT/deps/suitesparse" "$@" -DSUITESPARSE_DIR="$src" \
+    -DMETIS_INCLUDE_DIR="$PREFIX/include" -DCMAKE_INSTALL_PREFIX="$PREFIX" >/dev/null
+  cmake --build "$OUT/deps/suitesparse" -j"$JOBS" >/dev/null
+  cmake --install "$OUT/deps/suitesparse" >/dev/null
 }
 
 source_openmesh() {

@@ -115,11 +115,13 @@ def remesh(qgp_exe, linux_qgp, meshes, work):
     for name, options in RUNS:
         stem = os.path.splitext(name)[0]
         results = {}
-        for system, command, prefix in (("Windows", ["wine", qgp_exe], "win"), ("Linux", [linux_qgp], "linux")):
-            out, report = os.path.join(work, f"{prefix}_{stem}.obj"), os.path.join(work, f"{prefix}_{stem}.json")
+        for system in ("Windows", "Linux"):
+            out, report = os.path.join(work, f"{system}_{stem}.obj"), os.path.join(work, f"{system}_{stem}.json")
             args = ["remesh", os.path.join(meshes, name), "-o", out, "--report", report] + options
-            run = wine([qgp_exe] + args, timeout=900) if system == "Windows" else \
-                subprocess.run(command + args, capture_output=True, text=True, timeout=900)
+            if system == "Windows":
+                run = wine([qgp_exe] + args, timeout=900)
+            else:
+                run = subprocess.run([linux_qgp] + args, capture_output=True, text=True, timeout=900)
             if run.returncode != 0 or not os.path.exists(report):
                 check(False, f"{name} on {system}: qgp remesh exit {run.returncode}: {run.stderr.strip()[-300:]}")
                 break
