@@ -715,23 +715,15 @@ def test_batch():
 
 def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
-    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "truck.obj", "bunny.off", "joint.obj")]
+    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off", "joint.obj")]
     proc, report = run_batch(BATCH, inputs, out, "--faces", "300", "--uv", "--atlas", "512")
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
-    # truck: no longer refused at intake (its non-manifold edges are cut); at 300 quads the parts
-    # whose holes are narrower than a quad are rescued, as `qgp remesh truck.obj --faces 300` does:
-    # ok, with the rescue as the reason.
-    assert status == {"torus.obj": "ok", "truck.obj": "ok", "bunny.off": "ok", "joint.obj": "ok"}, \
-        (status, proc.stderr[-2000:])
+    assert status == {"torus.obj": "ok", "bunny.off": "ok", "joint.obj": "ok"}, (status, proc.stderr[-2000:])
     assert proc.returncode == 0 and report["failed"] == 0 and report["partial"] == 0, (proc.returncode, report)
-    truck = next(e for e in report["entries"] if e["input"].endswith("truck.obj"))
-    assert "quadded finer or by splitting their triangles" in truck["reason"], truck
-    # joint at 300 quads: only the refined copy has a flip-free map; its triangles are written.
-    # (truck's thin sheets fold within a few quads: its figures are its own test's, above)
-    good = [e for e in report["entries"] if not e["input"].endswith("truck.obj")]
-    flipped = {os.path.basename(e["input"]): e["flipped_quads"] for e in good}
+    flipped = {os.path.basename(e["input"]): e["flipped_quads"] for e in report["entries"]}
     assert flipped == {"torus.obj": 0, "bunny.off": 0, "joint.obj": 0}, flipped
-    refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in good}
+    # joint at 300 quads: only the refined copy has a flip-free map; its triangles are written.
+    refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in report["entries"]}
     assert refined == {"torus.obj": False, "bunny.off": False, "joint.obj": True}, refined
     joint_uv = [line for line in open(os.path.join(out, "joint_uv.obj")) if line.startswith("f ")]
     assert len(joint_uv) > 446 and all(len(line.split()) == 4 for line in joint_uv), len(joint_uv)
@@ -745,7 +737,15 @@ def test_batch_success():
         entry = next(e for e in report["entries"] if os.path.splitext(os.path.basename(e["input"]))[0] == name)
         assert entry["atlas"]["charts"] >= 1 and entry["atlas"]["texels_per_quad"] >= 1, entry
         assert os.path.exists(os.path.join(out, name + "_uv.obj"))
-    print("batch: good inputs written, the broken one recorded, exit", proc.returncode)
+    # truck: no longer refused at intake (its non-manifold edges are cut); at 300 quads the parts
+    # whose holes are narrower than a quad are rescued, as `qgp remesh truck.obj --faces 300` does:
+    # ok, with the rescue as the reason. (Its grid UVs are left out: with --uv it took 280 s of this
+    # test's 313 s, 2026-11-29.)
+    proc, report = run_batch(BATCH, [os.path.join(MESHES, "truck.obj")], out, "--faces", "300")
+    [truck] = report["entries"]
+    assert truck["status"] == "ok" and proc.returncode == 0, (truck, proc.stderr[-2000:])
+    assert "quadded finer or by splitting their triangles" in truck["reason"], truck
+    print("batch: inputs written with grid UVs and atlases; truck rescued, exit", proc.returncode)
 
 
 def test_parts_rescued(binding):
