@@ -77,6 +77,20 @@ void untangle_remaining(const ComponentState& state, IntegerGridMap& map, Progre
   s.winding_defects = count_exact_winding_defects(state.mesh, map.param, cone_quarter_turns(state.mesh, *state.field));
 }
 
+// When the map untangle alone leaves `map` with no flipped or degenerate triangle nor wound one-ring,
+// `map` becomes the untangled one (true); else `map` stays as it is. The untangle moves a few
+// vertices and keeps the map exact; the all-faces attempt it spares re-solves every face (on
+// face.obj's grid UVs, 60 Ipopt solves and 380 s for 2 triangles).
+bool untangles_alone(const ComponentState& state, IntegerGridMap& map, Progress& progress) {
+  IntegerGridMap untangled = map;
+  untangle_remaining(state, untangled, progress);
+  if (irregular_elements(untangled.stats) > 0) return false;
+  const int before = irregular_elements(map.stats);
+  map = std::move(untangled);
+  map.stats.path += "; untangled (" + std::to_string(before) + " irregular triangles or one-rings before)";
+  return true;
+}
+
 // Why a quad mesh is not a consistently oriented 2-manifold with Euler characteristic `euler`
 // ("" when it is).
 std::string quad_mesh_defects(const QuadTopology& t, int euler) {
@@ -295,7 +309,7 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
           "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
     }
   }
-  if (escalate && irregular_elements(map.stats) > 0) {
+  if (escalate && irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
     const int before = irregular_elements(map.stats);
     IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
     latest = all_faces.stats;
