@@ -299,7 +299,7 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   IntegerGridMap map = solver.solve(IgmAttempt::Default, 0, 0.4);
   map.stats.path = "global (penalty without regularity)";
   IgmStats latest = map.stats;
-  if (escalate && irregular_elements(map.stats) > 0) {
+  if (escalate && irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
     const int before = irregular_elements(map.stats);
     IntegerGridMap relinearized = solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
     latest = relinearized.stats;
@@ -308,18 +308,18 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
       map.stats.path =
           "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
     }
-  }
-  if (escalate && irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
-    const int before = irregular_elements(map.stats);
-    IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
-    latest = all_faces.stats;
-    if (irregular_elements(all_faces.stats) < before) {
-      map = std::move(all_faces);
-      map.stats.fallback_used = true;
-      map.stats.path =
-          "fallback: all-faces Ipopt (" + std::to_string(before) + " irregular triangles or one-rings before)";
-    } else {
-      map.stats.path = "global (all-faces fallback did not help)";
+    if (irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
+      const int still = irregular_elements(map.stats);
+      IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
+      latest = all_faces.stats;
+      if (irregular_elements(all_faces.stats) < still) {
+        map = std::move(all_faces);
+        map.stats.fallback_used = true;
+        map.stats.path =
+            "fallback: all-faces Ipopt (" + std::to_string(still) + " irregular triangles or one-rings before)";
+      } else {
+        map.stats.path = "global (all-faces fallback did not help)";
+      }
     }
   }
   count_every_attempt(map.stats, latest);

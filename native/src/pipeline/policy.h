@@ -8,9 +8,10 @@
 //                  quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
 //                                           the quad layout kept at length 1, quantized again
 //   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
-//   map                                     stalls); for grid UVs the re-linearized penalty phase,
-//                                           the map untangle when it alone makes the map regular,
-//                                           else the all-faces solve; then the map untangle
+//   map                                     stalls); for grid UVs, while the map is irregular and
+//                                           the map untangle alone does not make it regular: the
+//                                           re-linearized penalty phase, then the all-faces solve;
+//                                           then the map untangle
 //   uv map         fallback_cell_map        where the map stays flipped or wound: the §7.1.1 cell
 //                                           map, used when it is flip-free and unwound
 //   quads          choose_quads             the map's quads when the map is regular and they form a
@@ -107,9 +108,10 @@ bool integer_grid_map_serves(const IgmResult& map, bool escalate);
 
 // The component's integer-grid map: the default attempt (its repair bounded as above unless
 // `escalate`); when `escalate` and the map has flipped or degenerate triangles or wound one-rings,
-// the re-linearized penalty attempt (kept only if it has fewer); then the map untangle, kept when it
-// leaves none; else the all-faces attempt (kept only if it has fewer). Finally the map untangle
-// moves vertices where flipped or degenerate triangles remain. stats.path tells the rungs taken.
+// the map untangle, kept when it leaves none; else the re-linearized penalty attempt (kept only if
+// it has fewer), the untangle again, else the all-faces attempt (kept only if it has fewer).
+// Finally the map untangle moves vertices where flipped or degenerate triangles remain. stats.path
+// tells the rungs taken.
 IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress);
 
 // The round baseline's rounded map as the integer-grid map (no attempt applies).
