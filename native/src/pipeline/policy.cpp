@@ -285,6 +285,39 @@ bool integer_grid_map_serves(const IgmResult& map, bool escalate) {
 
 int irregular_elements(const IgmStats& s) { return s.flipped_triangles + s.degenerate_triangles + s.winding_defects; }
 
+namespace {
+
+// For grid UVs, while `map` has flipped or degenerate triangles or wound one-rings: the map untangle
+// when it alone makes the map regular; else the re-linearized penalty attempt, the untangle again,
+// then the all-faces attempt, each attempt kept only if it has fewer. `latest`: the last attempt's
+// stats.
+void escalate_while_irregular(const ComponentState& state, IntegerGridMapSolver& solver, IntegerGridMap& map,
+                              IgmStats& latest, Progress& progress) {
+  if (irregular_elements(map.stats) == 0 || untangles_alone(state, map, progress)) return;
+  const int before = irregular_elements(map.stats);
+  IntegerGridMap relinearized = solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
+  latest = relinearized.stats;
+  if (irregular_elements(relinearized.stats) < before) {
+    map = std::move(relinearized);
+    map.stats.path =
+        "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
+  }
+  if (irregular_elements(map.stats) == 0 || untangles_alone(state, map, progress)) return;
+  const int still = irregular_elements(map.stats);
+  IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
+  latest = all_faces.stats;
+  if (irregular_elements(all_faces.stats) < still) {
+    map = std::move(all_faces);
+    map.stats.fallback_used = true;
+    map.stats.path =
+        "fallback: all-faces Ipopt (" + std::to_string(still) + " irregular triangles or one-rings before)";
+  } else {
+    map.stats.path = "global (all-faces fallback did not help)";
+  }
+}
+
+}  // namespace
+
 IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress) {
   Timer timer;
   IgmOptions options;
@@ -299,29 +332,7 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   IntegerGridMap map = solver.solve(IgmAttempt::Default, 0, 0.4);
   map.stats.path = "global (penalty without regularity)";
   IgmStats latest = map.stats;
-  if (escalate && irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
-    const int before = irregular_elements(map.stats);
-    IntegerGridMap relinearized = solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
-    latest = relinearized.stats;
-    if (irregular_elements(relinearized.stats) < before) {
-      map = std::move(relinearized);
-      map.stats.path =
-          "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
-    }
-    if (irregular_elements(map.stats) > 0 && !untangles_alone(state, map, progress)) {
-      const int still = irregular_elements(map.stats);
-      IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
-      latest = all_faces.stats;
-      if (irregular_elements(all_faces.stats) < still) {
-        map = std::move(all_faces);
-        map.stats.fallback_used = true;
-        map.stats.path =
-            "fallback: all-faces Ipopt (" + std::to_string(still) + " irregular triangles or one-rings before)";
-      } else {
-        map.stats.path = "global (all-faces fallback did not help)";
-      }
-    }
-  }
+  if (escalate) escalate_while_irregular(state, solver, map, latest, progress);
   count_every_attempt(map.stats, latest);
   map.stats.seconds = timer.seconds();
   progress.update(1.0);
