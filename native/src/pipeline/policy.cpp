@@ -287,6 +287,15 @@ int irregular_elements(const IgmStats& s) { return s.flipped_triangles + s.degen
 
 namespace {
 
+// `attempt` replaces `map` when it has fewer flipped or degenerate triangles or wound one-rings
+// (true); `latest` becomes its stats either way.
+bool keep_if_fewer(IntegerGridMap& map, IntegerGridMap attempt, IgmStats& latest) {
+  latest = attempt.stats;
+  if (irregular_elements(attempt.stats) >= irregular_elements(map.stats)) return false;
+  map = std::move(attempt);
+  return true;
+}
+
 // For grid UVs, while `map` has flipped or degenerate triangles or wound one-rings: the map untangle
 // when it alone makes the map regular; else the re-linearized penalty attempt, the untangle again,
 // then the all-faces attempt, each attempt kept only if it has fewer. `latest`: the last attempt's
@@ -294,23 +303,14 @@ namespace {
 void escalate_while_irregular(const ComponentState& state, IntegerGridMapSolver& solver, IntegerGridMap& map,
                               IgmStats& latest, Progress& progress) {
   if (irregular_elements(map.stats) == 0 || untangles_alone(state, map, progress)) return;
-  const int before = irregular_elements(map.stats);
-  IntegerGridMap relinearized = solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
-  latest = relinearized.stats;
-  if (irregular_elements(relinearized.stats) < before) {
-    map = std::move(relinearized);
-    map.stats.path =
-        "global (penalty with regularity; " + std::to_string(before) + " irregular triangles or one-rings without)";
-  }
-  if (irregular_elements(map.stats) == 0 || untangles_alone(state, map, progress)) return;
-  const int still = irregular_elements(map.stats);
-  IntegerGridMap all_faces = solver.solve(IgmAttempt::AllFaces, 0.88, 0.99);
-  latest = all_faces.stats;
-  if (irregular_elements(all_faces.stats) < still) {
-    map = std::move(all_faces);
+  const std::string before = std::to_string(irregular_elements(map.stats)) + " irregular triangles or one-rings";
+  const bool relinearized = keep_if_fewer(map, solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85), latest);
+  if (relinearized) map.stats.path = "global (penalty with regularity; " + before + " without)";
+  if (irregular_elements(map.stats) == 0 || (relinearized && untangles_alone(state, map, progress))) return;
+  const std::string still = std::to_string(irregular_elements(map.stats)) + " irregular triangles or one-rings";
+  if (keep_if_fewer(map, solver.solve(IgmAttempt::AllFaces, 0.88, 0.99), latest)) {
     map.stats.fallback_used = true;
-    map.stats.path =
-        "fallback: all-faces Ipopt (" + std::to_string(still) + " irregular triangles or one-rings before)";
+    map.stats.path = "fallback: all-faces Ipopt (" + still + " before)";
   } else {
     map.stats.path = "global (all-faces fallback did not help)";
   }
