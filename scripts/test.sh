@@ -83,7 +83,7 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # So do cli_options and cli_stitch (106 s and 58 s under ASan, 2026-11-29), to make room for the
 # Windows build: the native code they run is instrumented here by the C API, session and
 # StitchSeams tests, and the CLI's own reading, repair reports and writing by cli_torture and
-# cli_info_meshes. And the grid UVs of a 102 400-triangle torus (10 s in Release): the grid UV
+# cli_info_meshes. And the grid UVs of a 102 400-triangle torus (7-10 s in Release): the grid UV
 # job's code runs here on smaller meshes (SessionPipeline.GridUv*).
 ASAN_SKIP='^cli_abnormal_end$|^cli_determinism$|^cli_options$|^cli_stitch$|^SessionPipeline\.DenseMeshUsesAWorkingMeshAndKeepsItsSurface$|^SessionPipeline\.GridUvsOfADenseMeshUseTheWholeInput$'
 ctest --test-dir build-asan --output-on-failure -j2 --timeout "$SWEEP_TIMEOUT" -E "$SWEEPS|$ASAN_SKIP" -L 'native|cli'

@@ -160,21 +160,16 @@ TEST(SessionPipeline, SpotBecomesAClosedQuadMeshOfTheRequestedSize) {
   EXPECT_GT(session.cut_edges().size(), 0u);
 }
 
-// The generated cube [0,n]^3 (test_support) as a triangle soup.
-PolygonSoup grid_cube_soup(int n) {
-  const TriMesh mesh = test::make_grid_cube(n).mesh;
-  std::vector<double> v;
-  std::vector<int32_t> f;
-  for (int i = 0; i < mesh.num_vertices(); ++i) v.insert(v.end(), {mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2)});
-  for (int t = 0; t < mesh.num_faces(); ++t) f.insert(f.end(), {mesh.F(t, 0), mesh.F(t, 1), mesh.F(t, 2)});
-  return soup_from_triangle_arrays(v.data(), mesh.num_vertices(), f.data(), mesh.num_faces());
+// A generated mesh as the triangle soup a Session reads (V and F are row-major: the C API's arrays).
+PolygonSoup triangle_soup(const TriMesh& mesh) {
+  return soup_from_triangle_arrays(mesh.V.data(), mesh.num_vertices(), mesh.F.data(), mesh.num_faces());
 }
 
 // A quad count below what the layout allows (a cube's eight corners need at least a quad per
 // side: 6, asked 3) is not a refusal: the fewest quads, and the report says so; an edge length
 // asks no count, and its quantization keeps the density's scale.
 TEST(SessionPipeline, CountBelowTheLayoutsFewestIsNamedAndEdgeLengthKeepsItsScale) {
-  Session session(grid_cube_soup(6));
+  Session session(triangle_soup(test::make_grid_cube(6).mesh));  // the cube [0,6]^3
   ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 3));
   expect_valid_output("cube@3", session, -1);
   expect_count_asked_for("cube@3", session.report(), 3);
@@ -309,7 +304,7 @@ TEST(SessionPipeline, GridUvsOfADenseMeshUseTheWholeInput) {
   TriMesh torus = test::make_grid_torus(320, 160).mesh;
   for (int v = 0; v < torus.num_vertices(); ++v)  // off the exact grid, like a sculpt (radial noise)
     torus.V.row(v) *= 1 + 1e-3 * std::sin(37.0 * v) * std::sin(11.0 * v + 1);
-  Session session(soup_from_triangle_arrays(torus.V.data(), torus.num_vertices(), torus.F.data(), torus.num_faces()));
+  Session session(triangle_soup(torus));
   ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 500, -1));
   EXPECT_EQ(session.report()["working_mesh"]["decimated_components"], 1);
   Progress progress;
