@@ -108,6 +108,38 @@ void run_completed(Session& session, Job job, double target, double sharp_angle 
   ASSERT_EQ(run_job(session, job, progress ? *progress : plain, &message), kCompleted) << message;
 }
 
+// The report's record of each component's integer-grid map attempts follows the grid-UV ladder
+// (pipeline/policy.h): the default attempt first; when it is irregular, the map untangle; then the
+// re-linearized and all-faces attempts; an attempt is kept only with fewer flipped or degenerate
+// triangles or wound one-rings than the map so far, and the untangle only when it leaves none.
+void expect_attempts_follow_the_ladder(const std::string& run, const Json& report) {
+  const std::set<std::string> ladder = {"default", "untangle", "relinearized penalty", "all faces"};
+  for (const Json& component : report["igm"]["components"]) {
+    if (!component.contains("attempts")) continue;  // a part that failed before its map
+    const Json& attempts = component["attempts"];
+    ASSERT_FALSE(attempts.empty()) << run;
+    EXPECT_EQ(attempts[0]["attempt"], "default") << run;
+    EXPECT_TRUE(attempts[0]["kept"].get<bool>()) << run;
+    int kept_irregular = attempts[0]["irregular"].get<int>();
+    if (kept_irregular == 0) EXPECT_EQ(attempts.size(), 1u) << run;
+    for (size_t i = 1; i < attempts.size(); ++i) {
+      const Json& a = attempts[i];
+      const std::string name = a["attempt"].get<std::string>();
+      const int irregular = a["irregular"].get<int>();
+      EXPECT_TRUE(ladder.count(name)) << run << ": " << name;
+      EXPECT_GE(a["seconds"].get<double>(), 0) << run;
+      if (name == "untangle")
+        EXPECT_EQ(a["kept"].get<bool>(), irregular == 0) << run;
+      else
+        EXPECT_EQ(a["kept"].get<bool>(), irregular < kept_irregular) << run << ": " << name;
+      if (a["kept"].get<bool>()) kept_irregular = irregular;
+      if (i + 1 < attempts.size()) EXPECT_GT(kept_irregular, 0) << run << ": attempts went on after a regular map";
+    }
+    if (attempts.back()["attempt"] == "all faces")
+      EXPECT_EQ(component["fallback_used"].get<bool>(), attempts.back()["kept"].get<bool>()) << run;
+  }
+}
+
 // The quad count asked for: within 5 %; or the report names the fewest quads the layout allows,
 // above the target, and the quads are no fewer; or the counts the layout steps between, around the
 // target, one of them made.
@@ -321,6 +353,7 @@ TEST(SessionPipeline, GridUvJobGivesIntegerSeamsAndNoQuads) {
   Progress progress;
   std::string message;
   ASSERT_EQ(run_job(session, Job::GridUV, progress, &message), kCompleted) << message;
+  expect_attempts_follow_the_ladder("bunny", session.report());
   EXPECT_EQ(session.quad_result(), nullptr);
   const std::vector<double>& uv = session.corner_uv();
   ASSERT_EQ(uv.size(), static_cast<size_t>(session.input().num_faces()) * 6);
@@ -363,6 +396,7 @@ TEST(SessionPipeline, GridUvJobGivesIntegerSeamsAndNoQuads) {
 TEST(SessionPipeline, GridUvsCoverTrianglesIntakeRemoved) {
   Session session(read_mesh_file(test::mesh_path("block.obj")));
   ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::GridUV, 500));
+  expect_attempts_follow_the_ladder("block", session.report());
   const PolygonSoup& in = session.input();
   std::vector<char> kept(in.num_faces(), 0);
   for (int f : session.intake()->input_face) kept[f] = 1;

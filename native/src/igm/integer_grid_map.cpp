@@ -577,6 +577,8 @@ ParametrizationSolution IntegerGridMapSolver::solve_all_faces(double begin, doub
   solve_options_.progress_end = end;
   const ParametrizationSolution all = problem_.solve(solve_options_, progress_);
   count_solves(all);
+  stats_.repair_bad_faces = all.stats.bad_after_round;
+  stats_.repair_seconds = all.stats.seconds_of_round;
   return all;
 }
 

@@ -62,6 +62,16 @@ enum class IgmAttempt {
 };
 const char* igm_attempt_name(IgmAttempt attempt);
 
+// One attempt as the policy ran it (report `igm.components[i].attempts`).
+struct IgmAttemptRecord {
+  std::string attempt;                // igm_attempt_name, or "untangle"
+  int irregular = 0;                  // flipped + degenerate triangles + wound one-rings of its exact map
+  bool kept = false;                  // it replaced the map before it
+  std::vector<int> repair_bad_faces;  // its hard solve's bad faces after each repair round
+  double seconds = 0;
+};
+QGP_JSON_FIELDS(IgmAttemptRecord, attempt, irregular, kept, repair_bad_faces, seconds)
+
 struct IgmStats {
   int flipped_triangles = 0;                                        // in the exact result (exact sign)
   int degenerate_triangles = 0;                                     // in the exact result
@@ -80,6 +90,7 @@ struct IgmStats {
   IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
   bool fallback_used = false;                // made by the all-faces attempt
   std::string path;                          // the policy's account of the attempts (pipeline/policy.h)
+  std::vector<IgmAttemptRecord> attempts;    // every attempt the policy ran, in order
   int penalty_iterations = 0;                // penalty solves run (all attempts so far)
   std::vector<double> penalty_violation;     // ‖Cz − b‖∞ after each penalty solve
   int constraints = 0;                       // scalar rows of C
@@ -191,6 +202,6 @@ QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, max_integer_r
                 penalty_iterations, seconds, path, penalty_integer_residual, constraints, max_constraint_violation,
                 unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, seconds_solve, seconds_sanitize,
                 flipped_before_untangle, degenerate_before_untangle, untangled_vertices, winding_defects,
-                flipped_initial, faces, repair_bad_faces, repair_seconds)
+                flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
 
 }  // namespace qgp

@@ -77,18 +77,19 @@ void untangle_remaining(const ComponentState& state, IntegerGridMap& map, Progre
   s.winding_defects = count_exact_winding_defects(state.mesh, map.param, cone_quarter_turns(state.mesh, *state.field));
 }
 
-// When the map untangle alone leaves `map` with no flipped or degenerate triangle nor wound one-ring,
-// `map` becomes the untangled one (true); else `map` stays as it is. The untangle moves a few
-// vertices and keeps the map exact; the all-faces attempt it spares re-solves every face (on
-// face.obj's grid UVs, 60 Ipopt solves and 380 s for 2 triangles).
-bool untangles_alone(const ComponentState& state, IntegerGridMap& map, Progress& progress) {
+// Untangles a copy of `map` (untangle_remaining); when the copy has no flipped or degenerate
+// triangle nor wound one-ring, `map` becomes it. Returns what the copy kept of them. The untangle
+// moves a few vertices and keeps the map exact; the all-faces attempt it spares re-solves every face
+// (on face.obj's grid UVs, 60 Ipopt solves and 380 s for 2 triangles).
+int untangle_if_it_regularizes(const ComponentState& state, IntegerGridMap& map, Progress& progress) {
   IntegerGridMap untangled = map;
   untangle_remaining(state, untangled, progress);
-  if (irregular_elements(untangled.stats) > 0) return false;
+  const int left = irregular_elements(untangled.stats);
+  if (left > 0) return left;
   const int before = irregular_elements(map.stats);
   map = std::move(untangled);
   map.stats.path += "; untangled (" + std::to_string(before) + " irregular triangles or one-rings before)";
-  return true;
+  return 0;
 }
 
 // Why a quad mesh is not a consistently oriented 2-manifold with Euler characteristic `euler`
@@ -287,28 +288,81 @@ int irregular_elements(const IgmStats& s) { return s.flipped_triangles + s.degen
 
 namespace {
 
-// `attempt` replaces `map` when it has fewer flipped or degenerate triangles or wound one-rings
-// (true); `latest` becomes its stats either way.
-bool keep_if_fewer(IntegerGridMap& map, IntegerGridMap attempt, IgmStats& latest) {
-  latest = attempt.stats;
-  if (irregular_elements(attempt.stats) >= irregular_elements(map.stats)) return false;
-  map = std::move(attempt);
-  return true;
-}
+// The attempts of one component's integer-grid map, run in turn: each is recorded, and kept only
+// when it has fewer flipped or degenerate triangles or wound one-rings than the map so far.
+class AttemptLadder {
+ public:
+  AttemptLadder(IntegerGridMapSolver& solver, IntegerGridMap& map) : solver_(solver), map_(map) {}
 
-// For grid UVs, while `map` has flipped or degenerate triangles or wound one-rings: the map untangle
-// when it alone makes the map regular; else the re-linearized penalty attempt, the untangle again,
-// then the all-faces attempt, each attempt kept only if it has fewer. `latest`: the last attempt's
-// stats.
-void escalate_while_irregular(const ComponentState& state, IntegerGridMapSolver& solver, IntegerGridMap& map,
-                              IgmStats& latest, Progress& progress) {
-  if (irregular_elements(map.stats) == 0 || untangles_alone(state, map, progress)) return;
-  const std::string before = std::to_string(irregular_elements(map.stats)) + " irregular triangles or one-rings";
-  const bool relinearized = keep_if_fewer(map, solver.solve(IgmAttempt::RelinearizedPenalty, 0.45, 0.85), latest);
+  // The first attempt: it becomes the map.
+  void start(IgmAttempt attempt, double begin, double end) {
+    Timer timer;
+    map_ = solver_.solve(attempt, begin, end);
+    latest_ = map_.stats;
+    record(igm_attempt_name(attempt), irregular_elements(map_.stats), map_.stats.repair_bad_faces, true,
+           timer.seconds());
+  }
+
+  // True when `attempt` replaced the map.
+  bool try_attempt(IgmAttempt attempt, double begin, double end) {
+    Timer timer;
+    IntegerGridMap next = solver_.solve(attempt, begin, end);
+    latest_ = next.stats;
+    const bool fewer = irregular_elements(next.stats) < irregular_elements(map_.stats);
+    record(igm_attempt_name(attempt), irregular_elements(next.stats), next.stats.repair_bad_faces, fewer,
+           timer.seconds());
+    if (fewer) map_ = std::move(next);
+    return fewer;
+  }
+
+  // True when the map untangle alone made the map regular (untangle_if_it_regularizes).
+  bool try_untangle(const ComponentState& state, Progress& progress) {
+    Timer timer;
+    const int left = untangle_if_it_regularizes(state, map_, progress);
+    record("untangle", left, {}, left == 0, timer.seconds());
+    return left == 0;
+  }
+
+  bool regular() const { return irregular_elements(map_.stats) == 0; }
+  std::string irregular_count() const {
+    return std::to_string(irregular_elements(map_.stats)) + " irregular triangles or one-rings";
+  }
+
+  // The map's stats get every attempt's record and effort.
+  void finish() {
+    count_every_attempt(map_.stats, latest_);
+    map_.stats.attempts = std::move(records_);
+  }
+
+ private:
+  void record(const char* name, int irregular, std::vector<int> repair_bad_faces, bool kept, double seconds) {
+    records_.push_back(IgmAttemptRecord{name, irregular, kept, std::move(repair_bad_faces), seconds});
+  }
+
+  IntegerGridMapSolver& solver_;
+  IntegerGridMap& map_;
+  IgmStats latest_;
+  std::vector<IgmAttemptRecord> records_;
+};
+
+// For grid UVs, while the map has flipped or degenerate triangles or wound one-rings: the map
+// untangle when it alone makes the map regular; else the re-linearized penalty attempt, the
+// untangle again, then the all-faces attempt (on parts of at most kMaxAllFacesTriangles), each
+// attempt kept only if it has fewer. The escalated attempts' repair stops once it stagnates
+// (kEscalatedStagnantRounds, like the default attempt's).
+void escalate_while_irregular(const ComponentState& state, AttemptLadder& ladder, IntegerGridMap& map,
+                              Progress& progress) {
+  if (ladder.regular() || ladder.try_untangle(state, progress)) return;
+  const std::string before = ladder.irregular_count();
+  const bool relinearized = ladder.try_attempt(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
   if (relinearized) map.stats.path = "global (penalty with regularity; " + before + " without)";
-  if (irregular_elements(map.stats) == 0 || (relinearized && untangles_alone(state, map, progress))) return;
-  const std::string still = std::to_string(irregular_elements(map.stats)) + " irregular triangles or one-rings";
-  if (keep_if_fewer(map, solver.solve(IgmAttempt::AllFaces, 0.88, 0.99), latest)) {
+  if (ladder.regular() || (relinearized && ladder.try_untangle(state, progress))) return;
+  const std::string still = ladder.irregular_count();
+  if (state.mesh.num_faces() > kMaxAllFacesTriangles) {
+    map.stats.path += "; all-faces attempt skipped (" + std::to_string(state.mesh.num_faces()) + " triangles)";
+    return;
+  }
+  if (ladder.try_attempt(IgmAttempt::AllFaces, 0.88, 0.99)) {
     map.stats.fallback_used = true;
     map.stats.path = "fallback: all-faces Ipopt (" + still + " before)";
   } else {
@@ -322,18 +376,19 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   Timer timer;
   IgmOptions options;
   options.edge_length = state.seamless_edge_length();
+  options.count_stagnation_rounds = escalate ? kEscalatedStagnantRounds : kStagnantRoundsWithoutEscalation;
   if (!escalate) {
     options.max_repair_rounds = kRepairRoundsWithoutEscalation;
-    options.count_stagnation_rounds = kStagnantRoundsWithoutEscalation;
     options.halving_rounds = kHalvingRoundsWithoutEscalation;
   }
   IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
                               state.traced->tmesh, state.quantization->result, options, progress);
-  IntegerGridMap map = solver.solve(IgmAttempt::Default, 0, 0.4);
+  IntegerGridMap map;
+  AttemptLadder ladder(solver, map);
+  ladder.start(IgmAttempt::Default, 0, 0.4);
   map.stats.path = "global (penalty without regularity)";
-  IgmStats latest = map.stats;
-  if (escalate) escalate_while_irregular(state, solver, map, latest, progress);
-  count_every_attempt(map.stats, latest);
+  if (escalate) escalate_while_irregular(state, ladder, map, progress);
+  ladder.finish();
   map.stats.seconds = timer.seconds();
   progress.update(1.0);
   untangle_remaining(state, map, progress);

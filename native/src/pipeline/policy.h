@@ -10,8 +10,9 @@
 //   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
 //   map                                     stalls); for grid UVs, while the map is irregular and
 //                                           the map untangle alone does not make it regular: the
-//                                           re-linearized penalty phase, then the all-faces solve;
-//                                           then the map untangle
+//                                           re-linearized penalty phase, then the all-faces solve
+//                                           (on parts up to kMaxAllFacesTriangles), each stopped
+//                                           where its repair stagnates; then the map untangle
 //   uv map         fallback_cell_map        where the map stays flipped or wound: the §7.1.1 cell
 //                                           map, used when it is flip-free and unwound
 //   quads          choose_quads             the map's quads when the map is regular and they form a
@@ -90,8 +91,8 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
 // Quads have a fallback (the T-mesh layout), grid UVs do not: only grid-UV jobs pay for the
 // integer-grid map's escalating attempts...
 bool escalates_integer_grid_map(Job job);
-// ...and the full budget of its repair rounds. Without escalation the map's repair stops after
-// kRepairRoundsWithoutEscalation rounds (three turns of the four repair strategies), or after
+// ...and a larger budget of its repair rounds (kEscalatedStagnantRounds). Without escalation the map's repair stops
+// after kRepairRoundsWithoutEscalation rounds (three turns of the four repair strategies), or after
 // kStagnantRoundsWithoutEscalation rounds (one turn) without fewer bad triangles: on 18 shared
 // meshes, maps that became regular took at most 9 Ipopt solves in all, while maps that stayed
 // flipped (their quads then come from the layout) spent up to 24 rounds, most over their whole
@@ -103,6 +104,15 @@ bool escalates_integer_grid_map(Job job);
 constexpr int kRepairRoundsWithoutEscalation = 12;
 constexpr int kStagnantRoundsWithoutEscalation = 4;
 constexpr int kHalvingRoundsWithoutEscalation = 4;
+// The escalated attempts (grid UVs) stop their repair after this many rounds without fewer bad
+// triangles (two turns of the strategies); they used to run all 24. joint at 300 quads: the same
+// map (1 flipped triangle, 1 wound one-ring left), 36 s before, 19 s after.
+constexpr int kEscalatedStagnantRounds = 8;
+// The all-faces attempt runs on parts of at most this many triangles: each of its repair rounds is
+// an Ipopt solve with every triangle under constraints. igea (268 686 triangles, 2 000 quads): one
+// round took over 3 minutes, and the grid-UV job ran past 25 minutes there; face.obj (51 712):
+// about 6 s a round.
+constexpr int kMaxAllFacesTriangles = 100000;
 // True when a stored map serves a job that does (escalate) or does not escalate.
 bool integer_grid_map_serves(const IgmResult& map, bool escalate);
 
