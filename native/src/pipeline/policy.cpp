@@ -323,6 +323,7 @@ class AttemptLadder {
     return left == 0;
   }
 
+  IgmStats& stats() { return map_.stats; }
   bool regular() const { return irregular_elements(map_.stats) == 0; }
   std::string irregular_count() const {
     return std::to_string(irregular_elements(map_.stats)) + " irregular triangles or one-rings";
@@ -350,23 +351,22 @@ class AttemptLadder {
 // untangle again, then the all-faces attempt (on parts of at most kMaxAllFacesTriangles), each
 // attempt kept only if it has fewer. The escalated attempts' repair stops once it stagnates
 // (kEscalatedStagnantRounds, like the default attempt's).
-void escalate_while_irregular(const ComponentState& state, AttemptLadder& ladder, IntegerGridMap& map,
-                              Progress& progress) {
+void escalate_while_irregular(const ComponentState& state, AttemptLadder& ladder, Progress& progress) {
   if (ladder.regular() || ladder.try_untangle(state, progress)) return;
   const std::string before = ladder.irregular_count();
   const bool relinearized = ladder.try_attempt(IgmAttempt::RelinearizedPenalty, 0.45, 0.85);
-  if (relinearized) map.stats.path = "global (penalty with regularity; " + before + " without)";
+  if (relinearized) ladder.stats().path = "global (penalty with regularity; " + before + " without)";
   if (ladder.regular() || (relinearized && ladder.try_untangle(state, progress))) return;
   const std::string still = ladder.irregular_count();
   if (state.mesh.num_faces() > kMaxAllFacesTriangles) {
-    map.stats.path += "; all-faces attempt skipped (" + std::to_string(state.mesh.num_faces()) + " triangles)";
+    ladder.stats().path += "; all-faces attempt skipped (" + std::to_string(state.mesh.num_faces()) + " triangles)";
     return;
   }
   if (ladder.try_attempt(IgmAttempt::AllFaces, 0.88, 0.99)) {
-    map.stats.fallback_used = true;
-    map.stats.path = "fallback: all-faces Ipopt (" + still + " before)";
+    ladder.stats().fallback_used = true;
+    ladder.stats().path = "fallback: all-faces Ipopt (" + still + " before)";
   } else {
-    map.stats.path = "global (all-faces fallback did not help)";
+    ladder.stats().path = "global (all-faces fallback did not help)";
   }
 }
 
@@ -386,8 +386,8 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   IntegerGridMap map;
   AttemptLadder ladder(solver, map);
   ladder.start(IgmAttempt::Default, 0, 0.4);
-  map.stats.path = "global (penalty without regularity)";
-  if (escalate) escalate_while_irregular(state, ladder, map, progress);
+  ladder.stats().path = "global (penalty without regularity)";
+  if (escalate) escalate_while_irregular(state, ladder, progress);
   ladder.finish();
   map.stats.seconds = timer.seconds();
   progress.update(1.0);

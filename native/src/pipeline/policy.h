@@ -106,7 +106,7 @@ constexpr int kStagnantRoundsWithoutEscalation = 4;
 constexpr int kHalvingRoundsWithoutEscalation = 4;
 // The escalated attempts (grid UVs) stop their repair after this many rounds without fewer bad
 // triangles (two turns of the strategies); they used to run all 24. joint at 300 quads: the same
-// map (1 flipped triangle, 1 wound one-ring left), 36 s before, 19 s after.
+// map (1 flipped triangle, 1 wound one-ring left), 36 s before, 14 s after.
 constexpr int kEscalatedStagnantRounds = 8;
 // The all-faces attempt runs on parts of at most this many triangles: each of its repair rounds is
 // an Ipopt solve with every triangle under constraints. igea (268 686 triangles, 2 000 quads): one
