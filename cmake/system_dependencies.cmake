@@ -1,7 +1,6 @@
 # The dependencies as the Debian packages install them (scripts/setup.sh): shared libraries, for the
 # build the tests, the CLI and the benchmark use. Defines the interface target qgp_dependencies.
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
-find_package(OpenMesh REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(IPOPT REQUIRED IMPORTED_TARGET ipopt)
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
@@ -15,5 +14,5 @@ find_package(Threads REQUIRED)
 add_library(qgp_dependencies INTERFACE)
 target_include_directories(qgp_dependencies SYSTEM INTERFACE ${CHOLMOD_INCLUDE_DIR} ${NLOHMANN_JSON_INCLUDE_DIR})
 target_link_libraries(qgp_dependencies INTERFACE
-  Eigen3::Eigen OpenMeshCore PkgConfig::IPOPT
-  ${CHOLMOD_LIBRARY} ${GMPXX_LIBRARY} ${GMP_LIBRARY} Threads::Threads)
+  Eigen3::Eigen PkgConfig::IPOPT
+  ${CHOLMOD_LIBRARY} ${GMPXX_LIBRARY} ${GMP_LIBRARY} Threads::Threads ${CMAKE_DL_LIBS})

@@ -7,7 +7,7 @@ set(_prefix_lib ${QGP_WINDOWS_PREFIX}/lib)
 # In link order.
 include(${CMAKE_CURRENT_LIST_DIR}/static_archive_group.cmake)
 qgp_static_archive_group(_archive_group "run scripts/build_windows.sh"
-  ${_prefix_lib}/libOpenMeshCore.a ${_prefix_lib}/libipopt.a ${_prefix_lib}/libdmumps.a
+  ${_prefix_lib}/libipopt.a ${_prefix_lib}/libdmumps.a
   ${_prefix_lib}/libmumps_common.a ${_prefix_lib}/libpord.a ${_prefix_lib}/libmpiseq.a
   ${_prefix_lib}/libcholmod.a ${_prefix_lib}/libmetis.a ${_prefix_lib}/liblapack.a
   ${_prefix_lib}/libblas.a ${_prefix_lib}/libgmpxx.a ${_prefix_lib}/libgmp.a)

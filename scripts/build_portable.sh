@@ -6,7 +6,7 @@
 # How (docs/portable-build.md has the why):
 #   - Zig (PyPI's ziglang, pinned, in .venv-zig) compiles C and C++ against glibc 2.28's symbol
 #     versions and links its own libc++ statically.
-#   - Every C++ dependency is built from Debian bookworm's sources with it (OpenMesh, Ipopt), and so
+#   - Every C++ dependency is built from Debian bookworm's sources with it (Ipopt), and so
 #     are the C ones that Debian ships only as shared or as position-dependent static archives
 #     (METIS, GMP, CHOLMOD). Sources are pinned by SHA-256.
 #   - Debian's static MUMPS, SCOTCH and OpenBLAS archives (scripts/setup.sh) are linked in as they are.
@@ -65,13 +65,6 @@ build_suitesparse() {
   cmake_suitesparse "${CMAKE_ZIG[@]}"
 }
 
-build_openmesh() {
-  source_openmesh
-  cmake -S "$src" -B "$OUT/deps/openmesh" "${CMAKE_ZIG[@]}" -DBUILD_APPS=OFF -DOPENMESH_DOCS=OFF >/dev/null
-  cmake --build "$OUT/deps/openmesh" -j"$JOBS" --target OpenMeshCoreStatic >/dev/null
-  install_openmesh "$OUT/deps/openmesh"
-}
-
 build_ipopt() {
   source_ipopt
   local lib=/usr/lib/x86_64-linux-gnu
@@ -112,7 +105,6 @@ toolchain
 build_dependency metis
 build_dependency gmp
 build_dependency suitesparse
-build_dependency openmesh
 build_dependency ipopt
 build_dependency fortran_runtime
 [ -d "$PREFIX/include/nlohmann" ] || cp -r /usr/include/nlohmann "$PREFIX/include/"  # header-only

@@ -7,7 +7,7 @@
 # under Wine.
 #
 # Every dependency is built from Debian bookworm's sources (scripts/lib/dependency_sources.sh,
-# pinned by SHA-256): METIS, GMP, CHOLMOD, OpenMesh, Ipopt as for the portable Linux library, plus
+# pinned by SHA-256): METIS, GMP, CHOLMOD, Ipopt as for the portable Linux library, plus
 # reference BLAS/LAPACK and sequential MUMPS (Debian ships neither for mingw-w64), and zlib and
 # libpng for the CLI. Each step is skipped when its result exists; delete build-windows/ to start
 # over. Needs the network (deb.debian.org) the first time.
@@ -49,13 +49,6 @@ build_gmp() {
 build_suitesparse() {
   source_suitesparse
   cmake_suitesparse "${CMAKE_MINGW[@]}"
-}
-
-build_openmesh() {
-  source_openmesh
-  cmake -S "$src" -B "$OUT/deps/openmesh" "${CMAKE_MINGW[@]}" -DBUILD_APPS=OFF -DOPENMESH_DOCS=OFF >/dev/null
-  cmake --build "$OUT/deps/openmesh" -j"$JOBS" --target OpenMeshCore >/dev/null  # static on Windows
-  install_openmesh "$OUT/deps/openmesh"
 }
 
 build_lapack() {  # real and complex double precision (CHOLMOD calls both): libblas.a and liblapack.a
@@ -151,7 +144,7 @@ header_only() {  # nlohmann-json and CLI11 from Debian's packages: /usr/include 
 }
 
 mkdir -p "$SOURCES" "$PREFIX/lib" "$PREFIX/include"
-for dependency in metis gmp suitesparse openmesh lapack mumps ipopt zlib libpng; do
+for dependency in metis gmp suitesparse lapack mumps ipopt zlib libpng; do
   build_dependency "$dependency"
 done
 header_only

@@ -83,19 +83,6 @@ cmake_suitesparse() {  # CMake arguments (the toolchain)...: CHOLMOD from $src, 
   cmake --install "$OUT/deps/suitesparse" >/dev/null
 }
 
-source_openmesh() {
-  fetch openmesh_9.0.orig.tar.gz "$DEBIAN/o/openmesh/openmesh_9.0.orig.tar.gz" \
-    4df84295f5cca86b1ae8bfee8ff4db5efb6850e4e5b571ad0199147176dea796
-  unpack openmesh_9.0.orig.tar.gz OpenMesh-9.0.0
-  src=$SOURCES/OpenMesh-9.0.0
-}
-
-install_openmesh() {  # OpenMesh build folder: the static Core library and its headers into $PREFIX
-  find "$1" -name 'libOpenMesh*.a' -exec cp {} "$PREFIX/lib/" \;
-  # The headers, with the template definitions (.cc) they include.
-  (cd "$src/src" && find OpenMesh \( -name '*.hh' -o -name '*.cc' \) -exec cp --parents {} "$PREFIX/include/" \;)
-}
-
 source_ipopt() {
   fetch coinor-ipopt_3.11.9.orig.tar.gz "$DEBIAN/c/coinor-ipopt/coinor-ipopt_3.11.9.orig.tar.gz" \
     84991b13ce22e4a4aa0756a5db290c2b811bf82ff4e9124d1a71867118e6ab2d

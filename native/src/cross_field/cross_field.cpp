@@ -8,6 +8,7 @@
 #include <random>
 #include <string>
 
+#include "core/blas_kernels.h"
 #include "core/error.h"
 
 namespace qgp {
@@ -250,6 +251,7 @@ using Solver = Eigen::CholmodDecomposition<ComplexSparse, Eigen::Lower>;
 // 268k faces, Debian's reference BLAS: 1.0 s + 0.9 s CPU, against 0.2 s + 1.8 s with AMD) and
 // halves the fill. AMD is the fallback if METIS is unavailable. CHOLMOD prints nothing.
 void factorize(Solver& solver, const ComplexSparse& A, const Progress& progress) {
+  pin_blas_kernels();
   solver.cholmod().print = 0;
   solver.cholmod().nmethods = 1;
   solver.cholmod().method[0].ordering = CHOLMOD_METIS;

@@ -4,6 +4,7 @@
 #include <limits>
 #include <set>
 
+#include "core/blas_kernels.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "intake/working_mesh.h"
@@ -142,6 +143,7 @@ void Session::run(Job job, Progress& progress) {
     if (job != Job::Intake) run_remesh_stages(job, progress);
     report_["timings_s"]["total"] = total.seconds();
     report_["peak_memory_mb"] = peak_resident_mb();
+    report_["blas_kernels"] = blas_kernels();
   } catch (const Error& e) {
     report_error(error_code_name(e.code()), e.what());
     report_["timings_s"]["total"] = total.seconds();

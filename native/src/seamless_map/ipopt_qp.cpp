@@ -8,6 +8,7 @@
 #include <exception>
 #include <mutex>
 
+#include "core/blas_kernels.h"
 #include "core/error.h"
 
 namespace qgp {
@@ -151,6 +152,7 @@ QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progre
     return empty;
   }
 
+  pin_blas_kernels();
   std::lock_guard<std::mutex> lock(ipopt_mutex());
   Ipopt::SmartPtr<QPProblem> problem = new QPProblem(qp, options, progress);
   // No console journal: Ipopt prints nothing (not even its banner).

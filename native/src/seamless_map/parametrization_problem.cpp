@@ -9,6 +9,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/blas_kernels.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "seamless_map/ipopt_qp.h"
@@ -742,6 +743,7 @@ void ParametrizationProblem::Solver::solve_equality_only() {
   z_ = Eigen::VectorXd::Zero(sys_.num_free);
   if (sys_.num_free > 0) {
     if (!sys_.factorized) {
+      pin_blas_kernels();
       sys_.cholesky.compute(sys_.Q);
       if (sys_.cholesky.info() != Eigen::Success)
         throw Error(ErrorCode::StageFailed,

@@ -99,6 +99,8 @@ def test_operators(binding):
         quad = run_quad_remesh(source, target_faces=TARGET, use_marked_sharp=True, use_sharp_angle=False,
                                keep_source_visible=True)
         session = worker_session(source)
+        # The zip's static OpenBLAS runs its baseline kernels on every CPU (core/blas_kernels.h).
+        assert session.report()["blas_kernels"] == "Prescott", session.report().get("blas_kernels")
         figures = check_quad_object(binding, source, quad, TARGET)
         extra = ""
         if source is fandisk:
