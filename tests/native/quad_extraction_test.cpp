@@ -402,9 +402,10 @@ struct CubeQuads {
 TEST(UntangleQuads, FoldedCubeQuadsAreUnfoldedWithoutMovingFeatureVertices) {
   CubeQuads input;
   auto& [cube, progress, quads, sharp, bvh] = input;
-  auto on_cube_edge = [&](int v) {
+  auto on_cube_edge = [&input](int v) {  // (C++17 lambdas cannot capture structured bindings)
+    const auto& V = input.quads.V;
     int extreme = 0;
-    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
+    for (int a = 0; a < 3; ++a) extreme += std::abs(V(v, a)) < 1e-9 || std::abs(V(v, a) - 4) < 1e-9;
     return extreme >= 2;
   };
   // Push a few face-interior vertices past the opposite corner of one of their quads (staying on
