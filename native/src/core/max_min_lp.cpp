@@ -26,9 +26,23 @@ Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& 
   };
   Vec2 best = Vec2::Zero();
   double best_value = worst(best);
+  // d replaces the best when its worst term is larger. The terms are tried from the one that was
+  // worst at the last best point, and the first at or below the best value rules d out: the same
+  // answer as evaluating them all, without the O(m) cost for almost every candidate.
+  size_t first = 0;
+  auto beats_best = [&](const Vec2& d) {
+    if (c[first] + g[first].dot(d) <= best_value) return false;
+    for (size_t i = 0; i < m; ++i)
+      if (c[i] + g[i].dot(d) <= best_value) {
+        first = i;
+        return false;
+      }
+    return true;
+  };
   auto consider = [&](const Vec2& d) {
-    const double w = worst(d);
-    if (w > best_value) best_value = w, best = d;
+    if (!beats_best(d)) return;
+    best_value = worst(d);
+    best = d;
   };
   for (int k = 0; k < 8; ++k) {
     consider(corner[k]);

@@ -271,10 +271,21 @@ class Untangler {
       for (int k = 0; k < 4; ++k) perimeter += (p[(k + 1) % 4] - p[k]).norm();
       quad_scale_[q] = perimeter > 0 ? 16 / (perimeter * perimeter) : 0;
     }
+    // A vertex whose star is as it was when it last found no better place finds none again: only
+    // vertices beside one that moved are tried again (the same moves as trying every vertex).
+    std::vector<char> stale(nv, 0);
+    for (int v : movable) stale[v] = 1;
     for (int sweep = 0; sweep < kSweeps; ++sweep) {
       progress_.check_cancel();
       bool any = false;
-      for (int v : movable) any = improve_vertex(v, reach * mean_edge_[v]) || any;
+      for (int v : movable) {
+        if (!stale[v]) continue;
+        stale[v] = 0;
+        if (!improve_vertex(v, reach * mean_edge_[v])) continue;
+        any = true;
+        for (int q : vertex_quads_[v])
+          for (int k = 0; k < 4; ++k) stale[quads_.Q(q, k)] = 1;
+      }
       if (!any) break;
     }
     std::vector<char> now(affected.size());
