@@ -37,7 +37,12 @@ struct TracedMap {
 struct Quantized {
   QuantizationResult result;
   int fold_rounds = 0;          // re-quantizations that kept folding zero edges at 1 (greedy)
-  int kept_positive_edges = 0;  // T-edges kept at length >= 1 by them
+  int kept_positive_edges = 0;  // T-edges kept at length >= 1 by them (and by the flip rounds)
+  // Re-quantizations that kept zero edges beside flipped layout quads at 1 (greedy), and the layout
+  // quads flipped against the surface before and after them (-1: the layout is not a valid mesh).
+  int flip_rounds = 0;
+  int flipped_layout_quads_before = 0, flipped_layout_quads = 0;
+  double flip_seconds = 0;  // the layouts placed, untangled and judged, and the re-quantizations
   // The quad count asked of this component (0: none, an edge length was asked), the scale the
   // density gave, the re-quantizations that moved the scale toward the count, and the fewest
   // quads the layout allows when they are more than asked (-1: not measured).

@@ -17,14 +17,10 @@
 namespace qgp {
 namespace {
 
-// Zero T-edges (x = 0) whose collapse folds the quad layout: those on the sides of the cells whose
-// layout quads are not manifold, and of the cells up to `rings` cells away. Empty when the
-// layout is a manifold quad mesh (the connectivity every map with this quantization gives).
-std::vector<int> folding_zero_edges(const ComponentState& state, const std::vector<int64_t>& x, int rings) {
-  Progress quiet;
-  const TMesh& tm = state.traced->tmesh;
-  const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, tm, x, quiet, false);
-  const std::vector<char> bad = non_manifold_quads(layout.quads);
+// Zero T-edges (x = 0) on the sides of the cells of the layout quads marked `bad`, and of the cells
+// up to `rings` cells away.
+std::vector<int> zero_edges_around(const TMesh& tm, const LayoutQuads& layout, const std::vector<char>& bad,
+                                   const std::vector<int64_t>& x, int rings) {
   std::vector<char> in_region(tm.cells.size(), 0);
   std::vector<int> region;
   for (size_t q = 0; q < bad.size(); ++q)
@@ -51,6 +47,88 @@ std::vector<int> folding_zero_edges(const ComponentState& state, const std::vect
       for (int e : side)
         if (x[e] == 0) edges.push_back(e);
   return edges;
+}
+
+// Zero T-edges whose collapse folds the quad layout: those around the cells whose layout quads are
+// not manifold (zero_edges_around). Empty when the layout is a manifold quad mesh (the
+// connectivity every map with this quantization gives).
+std::vector<int> folding_zero_edges(const ComponentState& state, const std::vector<int64_t>& x, int rings) {
+  Progress quiet;
+  const TMesh& tm = state.traced->tmesh;
+  const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, tm, x, quiet, false);
+  return zero_edges_around(tm, layout, non_manifold_quads(layout.quads), x, rings);
+}
+
+UntangleStats untangle_on_surface(const ComponentState& state, const std::vector<char>& feature_edges, QuadMesh& quads,
+                                  Progress& progress);
+std::string quad_mesh_defects(const QuadTopology& t, int euler);
+
+// The layout quads of a quantization, placed on the surface and untangled as choose_quads places
+// them, and which of them stay flipped against the input surface.
+struct LayoutFlips {
+  LayoutQuads layout;
+  std::vector<char> flipped;  // per layout quad
+  int count = 0;
+  bool valid = false;  // a consistently oriented 2-manifold of the part's Euler characteristic
+  // Valid, with fewer flipped quads.
+  bool better_than(const LayoutFlips& o) const { return valid && (!o.valid || count < o.count); }
+};
+
+LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>& x, Progress& progress) {
+  LayoutFlips flips;
+  flips.layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, x, progress);
+  QuadMesh& quads = flips.layout.quads;
+  flips.flipped.assign(quads.num_quads(), 0);
+  flips.valid = quad_mesh_defects(quad_topology(quads), state.euler_characteristic).empty();
+  if (!flips.valid) return flips;
+  untangle_on_surface(state, state.field->feature_edge, quads, progress);
+  const TriMesh& surface = state.full_mesh ? *state.full_mesh : state.mesh;
+  const TriangleBvh bvh(surface);
+  for (int q = 0; q < quads.num_quads(); ++q) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
+    flips.flipped[q] = quad_is_flipped(p, surface, bvh);
+    flips.count += flips.flipped[q];
+  }
+  return flips;
+}
+
+// Flip rounds: while the layout's quads stay flipped against the surface (they cross a thin or
+// sharply curved part: cells collapsed beside them squeeze the quads there), the zero T-edges around
+// their cells, then up to kMaxFlipRings cells away, are kept at length 1 and the T-mesh is
+// quantized again, up to kMaxFlipRounds times; a round is kept only when its layout is valid and
+// has fewer flipped quads. No round is tried when more than kMaxFlipShare of the quads stay flipped.
+void keep_zero_edges_where_layout_flips(const ComponentState& state, QuantizationOptions& options, Quantized& q,
+                                        Progress& progress) {
+  Timer timer;
+  const TMesh& tmesh = state.traced->tmesh;
+  LayoutFlips best = layout_flips(state, q.result.x, progress);
+  q.flipped_layout_quads_before = best.valid ? best.count : -1;
+  const bool hopeless = best.count > kMaxFlipShare * best.layout.quads.num_quads();
+  for (int round = 0, rings = 0;
+       !hopeless && best.valid && best.count > 0 && round < kMaxFlipRounds && rings <= kMaxFlipRings;) {
+    const std::vector<int> edges = zero_edges_around(tmesh, best.layout, best.flipped, q.result.x, rings);
+    if (edges.empty()) {
+      ++rings;
+      continue;
+    }
+    ++round;
+    QuantizationOptions trial = options;
+    trial.min_length.resize(tmesh.edges.size(), 0);
+    for (int e : edges) trial.min_length[e] = 1;
+    QuantizationResult result = quantize(tmesh, trial, progress);
+    LayoutFlips flips = layout_flips(state, result.x, progress);
+    if (!flips.better_than(best)) {
+      ++rings;
+      continue;
+    }
+    q.result = std::move(result);
+    options = std::move(trial);
+    best = std::move(flips);
+    ++q.flip_rounds;
+  }
+  q.flipped_layout_quads = best.valid ? best.count : -1;
+  q.flip_seconds = timer.seconds();
 }
 
 // The effort counters of every attempt so far (`latest`, the last attempt's stats) on the kept map.
@@ -188,6 +266,7 @@ Quantized quantize_without_folds(const ComponentState& state, double scale, Prog
     q.result = quantize(tmesh, options, progress);
     q.fold_rounds = round + 1;
   }
+  keep_zero_edges_where_layout_flips(state, options, q, progress);
   for (int64_t m : options.min_length) q.kept_positive_edges += static_cast<int>(m);
   return q;
 }

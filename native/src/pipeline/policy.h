@@ -6,7 +6,9 @@
 //                                           when its count is off; the fewest quads measured when
 //                                           more than asked remain
 //                  quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
-//                                           the quad layout kept at length 1, quantized again
+//                                           the quad layout kept at length 1, quantized again; then
+//                                           those around layout quads that stay flipped against
+//                                           the surface, while fewer stay flipped
 //   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
 //   map                                     stalls); for grid UVs, while the map is irregular and
 //                                           the map untangle alone does not make it regular: the
@@ -53,6 +55,13 @@ constexpr double kMaxSeamlessRescale = 2;
 constexpr int kSeamlessStagnantRounds = 4;
 // Re-quantizations against a folding layout.
 constexpr int kMaxFoldRounds = 8;
+// Re-quantizations against layout quads flipped against the surface, and how many cells away from
+// theirs zero edges are kept at most (see quantize_without_folds).
+constexpr int kMaxFlipRounds = 4;
+constexpr int kMaxFlipRings = 3;
+// No flip round is tried when more than this share of the layout's quads stay flipped (cycloidal's
+// small gear parts: 30 of 115, 47 of 263; the rounds cost seconds there and left them flipped).
+constexpr double kMaxFlipShare = 0.05;
 // Symmetry, relative to the bounding-box diagonal: input vertices this close to a plane are moved
 // onto it before the cut (no sliver beside them), and the half's quad boundary vertices this close
 // are welded to their mirror image (extraction puts them on the plane; projection onto a decimated
@@ -66,7 +75,11 @@ bool seamless_map_serves(double solved_for, double edge_length);
 // Greedy quantization of the component's T-mesh at `scale`. A valid quantization can still
 // collapse cells so that the layout folds (a regular point between two quads only, two quads on
 // both sides of one edge): the zero edges there, and in a widening ring of cells around, are kept
-// at length 1 and the T-mesh is quantized again, up to kMaxFoldRounds times.
+// at length 1 and the T-mesh is quantized again, up to kMaxFoldRounds times. Then, while the
+// layout's quads placed on the surface stay flipped against it (collapsed cells squeeze them where
+// the part is thin or sharply curved), the zero edges around their cells are kept at 1 the same
+// way, up to kMaxFlipRounds times and kMaxFlipRings cells away; a round is kept only when it leaves
+// fewer flipped quads in a valid layout. The quads keep their size where that needs no collapse.
 Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress);
 
 // Re-quantizations that move the scale toward a component's share of the quad count asked...

@@ -188,6 +188,10 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
     Json& entry = per_component.back();
     entry["fold_rounds"] = q.fold_rounds;
     entry["kept_positive_edges"] = q.kept_positive_edges;
+    entry["flip_rounds"] = q.flip_rounds;
+    entry["flipped_layout_quads_before"] = q.flipped_layout_quads_before;
+    entry["flipped_layout_quads"] = q.flipped_layout_quads;
+    entry["flip_seconds"] = q.flip_seconds;
     entry["target_quads"] = q.target_quads;
     entry["nominal_scale"] = q.nominal_scale;
     entry["count_rounds"] = q.count_rounds;
