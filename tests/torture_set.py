@@ -129,9 +129,10 @@ CASES = [
     Case("thin_torus", obj_writer(lambda: torus(128, 12, 1.0, 0.01)), "quads",
          note="about 2 quads around the tube; the same torus as 96 x 8 triangles gives 65 flipped quads "
               "after 18 s (docs/limitations.md)"),
-    Case("torus_40x10", obj_writer(lambda: torus(40, 10, 1.0, 0.2)), "rescued", "T-mesh tracing",
-         note="known defect (issue 23, item 4): a 40 x 10 torus with a tube of 1/5 its ring; T-mesh tracing "
-              "fails at a singular vertex, so its triangles are split into quads (docs/limitations.md)"),
+    Case("torus_40x10", obj_writer(lambda: torus(40, 10, 1.0, 0.2)), "quads",
+         note="a 40 x 10 torus with a tube of 1/5 its ring: its smoothest field has exactly one singularity of "
+              "index +1 and one of -1, which no seamless map follows without folds; the cross field cancels "
+              "the pair (it failed in T-mesh tracing and was rescued by split triangles before)"),
     Case("sphere_with_small_holes", obj_writer(sphere_with_small_holes), "quads"),
     Case("offset_1e6", obj_writer(lambda: transformed(uv_sphere(), offset=(1e6, 1e6, 1e6))), "quads"),
     Case("scale_1e-4", obj_writer(lambda: transformed(uv_sphere(), scale=1e-4)), "quads"),

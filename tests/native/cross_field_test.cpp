@@ -7,7 +7,9 @@
 
 #include "core/error.h"
 #include "cross_field/cross_field.h"
+#include "cut_graph/cut_graph.h"
 #include "field_test_cases.h"
+#include "seamless_map/seamless_map.h"
 
 namespace qgp {
 namespace {
@@ -346,6 +348,64 @@ TriMesh make_ring_disc(int n) {
     faces.push_back({r1(i), r2(i + 1), r1(i + 1)});
   }
   return test::make_triangles(points, faces);
+}
+
+// Quarter turns (mod 4) of the matchings around a closed loop of faces, each next to the one before.
+int dual_loop_turns(const TriMesh& mesh, const CrossField& field, const std::vector<int>& faces) {
+  int turns = 0;
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const int f = faces[i], g = faces[(i + 1) % faces.size()];
+    int crossing = -1;
+    for (int k = 0; k < 3; ++k)
+      if (mesh.opposite[3 * f + k] >= 0 && mesh.opposite[3 * f + k] / 3 == g) crossing = 3 * f + k;
+    EXPECT_GE(crossing, 0) << "faces " << f << " and " << g << " are not neighbours";
+    if (crossing >= 0) turns += field.matching[crossing];
+  }
+  return turns % 4;
+}
+
+// Closed tori, coarse to fine, thin to fat: the Knoeppel field of some has exactly one singularity
+// of index +1 and one of -1, or none and a quarter turn around a handle loop; no seamless map
+// follows such a field without folds (a flat torus without cones has no rotation around a loop;
+// no quad mesh of the torus has exactly one vertex of valence 3 and one of valence 5). Every field
+// is admissible after compute_cross_field, and every field without singularities gets a seamless
+// map free of flips.
+TEST(CrossField, ClosedToriGetFieldsASeamlessMapFollows) {
+  int cancelled = 0, untwisted = 0, tori = 0, regular = 0;
+  for (int nu : {24, 32, 40, 48, 64})
+    for (int nv : {8, 10, 12, 16})
+      for (double minor : {0.1, 0.2, 0.25, 0.4}) {
+        const std::string name =
+            "torus " + std::to_string(nu) + " x " + std::to_string(nv) + ", tube " + std::to_string(minor);
+        const TriMesh mesh = test::make_grid_torus(nu, nv, 1.0, minor).mesh;
+        Progress progress;
+        const CrossField field = compute_cross_field(mesh, CrossFieldOptions{}, progress);
+        check_field(mesh, field, -1);
+        cancelled += field.num_cancelled_pairs;
+        untwisted += field.num_untwisted_loops;
+        ++tori;
+        int plus = 0, minus = 0;
+        for (int index : field.vertex_index) plus += index == 1, minus += index == -1;
+        EXPECT_FALSE(field.num_singularities == 2 && plus == 1 && minus == 1) << name;
+        if (field.num_singularities > 0) continue;  // pairs of +1 outside and -1 inside the ring
+        // Faces of quad (i, j): 2 (i nv + j) below its diagonal, + 1 above it.
+        std::vector<int> around_ring, around_tube;
+        for (int i = 0; i < nu; ++i) around_ring.insert(around_ring.end(), {2 * i * nv + 1, 2 * i * nv});
+        for (int j = 0; j < nv; ++j) around_tube.insert(around_tube.end(), {2 * j, 2 * j + 1});
+        EXPECT_EQ(dual_loop_turns(mesh, field, around_ring), 0) << name;
+        EXPECT_EQ(dual_loop_turns(mesh, field, around_tube), 0) << name;
+        // Such a field has the flat torus's map, which the seamless map must find.
+        const CutGraph cut = compute_cut_graph(mesh, field, progress);
+        SeamlessMapOptions options;
+        options.edge_length = 0.1;
+        const SeamlessMap map = compute_seamless_map(mesh, field, cut, options, progress);
+        EXPECT_EQ(map.stats.flipped_triangles + map.stats.degenerate_triangles + map.stats.winding_defects, 0) << name;
+        ++regular;
+      }
+  EXPECT_EQ(tori, 80);
+  EXPECT_GE(regular, 40);
+  EXPECT_GT(cancelled, 0);  // the set holds both kinds of inadmissible field
+  EXPECT_GT(untwisted, 0);
 }
 
 TEST(CrossField, AcuteFeatureSectorMapsToOneQuarterTurn) {

@@ -93,6 +93,11 @@ struct CrossField {
                                        // neighbour: one matching (|residual| < 135deg) or one
                                        // edge_sector (|rho| < 90deg) per move (see
                                        // resolve_collapsed_sectors in cross_field.cpp)
+  int num_cancelled_pairs = 0;         // a closed torus's fields that no seamless map follows
+  int num_untwisted_loops = 0;         // without folds, made admissible (see
+                                       // compute_cross_field): its one pair of singularities of
+                                       // index +1 and -1 cancelled; its handle loops around which
+                                       // a field without singularities turns untwisted
   int num_singularities = 0;           // vertices with vertex_index != 0
   int index_sum = 0;                   // sum of vertex_index (quarter turns) = 4 * chi
   int euler_characteristic = 0;        // of the mesh

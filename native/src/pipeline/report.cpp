@@ -81,6 +81,8 @@ Json field_report(const std::vector<ComponentState>& components) {
                              {"feature_edges", features},
                              {"overconstrained_faces", field.num_overconstrained_faces},
                              {"collapsed_sectors", field.num_collapsed_sectors},
+                             {"cancelled_pairs", field.num_cancelled_pairs},
+                             {"untwisted_loops", field.num_untwisted_loops},
                              {"cut_edges", state.cut->num_cut_edges}});
     singularities += field.num_singularities;
     index_quarters += field.index_sum;
