@@ -180,6 +180,7 @@ std::string quad_mesh_defects(const QuadTopology& t, int euler) {
   add(t.non_manifold_edges, "non-manifold edge(s)");
   add(t.inconsistent_edges, "inconsistently oriented edge(s)");
   add(t.degenerate_quads, "degenerate quad(s)");
+  if (t.faces == 0) defects = "no quads";  // a torus's empty layout has its Euler characteristic, 0
   if (defects.empty() && t.euler_characteristic != euler)
     defects = "Euler characteristic " + std::to_string(t.euler_characteristic) + " instead of " + std::to_string(euler);
   return defects;
@@ -299,8 +300,11 @@ struct CountSearch {
   // The count jumps over the target between two scales a thousandth apart (whole rows of quads,
   // such as a ring around a handle, come and go at once): no scale gives a count in between.
   bool at_step() const { return fewer > 0 && std::isfinite(more) && more - fewer < 1e-3 * more; }
+  // A trial without quads (a part narrower than a quad everywhere, such as a thin torus's tube)
+  // is the best only while no trial has quads.
   void add(const CountTrial& trial) {
-    if (!tried || std::abs(trial.quads - target) < std::abs(best.quads - target)) best = trial;
+    const bool closer = std::abs(trial.quads - target) < std::abs(best.quads - target);
+    if (!tried || (trial.quads > 0 && (best.quads == 0 || closer))) best = trial;
     tried = true;
     if (trial.quads < target) fewer = std::max(fewer, trial.scale), below = std::max(below, trial.quads);
     if (trial.quads > target)
@@ -349,6 +353,10 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
     }
   }
   Quantized q = quantize_without_folds(state, search.best.scale, progress);
+  if (q.result.quads_expected == 0)  // its map and quads would be empty: fail before solving them
+    throw Error(ErrorCode::StageFailed,
+                "quantization: the layout collapses to no quad at this density (the part is narrower than one "
+                "quad)");
   if (search.at_step() && !search.on_target()) q.count_step = {search.below, search.above};
   q.target_quads = target_quads;
   q.nominal_scale = scale;
