@@ -144,11 +144,13 @@ TEST(RescueMeshes, TruckAtACoarseDensity) {
     const ComponentState& state = session.components()[r["component"].get<int>()];
     EXPECT_EQ(r["quads"].get<int>(), state.quad_choice().extraction.quads.num_quads());
     const std::string why = r["message"];
-    const bool flipped = why.find("stay flipped") != std::string::npos;
+    const bool flipped = why.find("flipped against the surface") != std::string::npos;
     EXPECT_TRUE(flipped || why.find("narrower than one quad") != std::string::npos) << why;
-    if (flipped) {
-      EXPECT_EQ(r["rescue"], "split triangles");
-      EXPECT_EQ(state.quad_choice().untangle.flipped_after, 0);
+    if (flipped) {  // split (none flipped) or quadded finer (fewer flipped than the count it names)
+      if (r["rescue"] == "split triangles")
+        EXPECT_EQ(state.quad_choice().untangle.flipped_after, 0);
+      else
+        EXPECT_LT(state.quad_choice().untangle.flipped_after, std::stoi(why)) << why;
       ++flip_rescues;
     }
     kinds.insert(r["rescue"].get<std::string>());

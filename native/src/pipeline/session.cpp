@@ -328,22 +328,47 @@ bool Session::rescues_failed_components(Job job) const {
   return job == Job::Remesh && options_.quantizer == Quantizer::Greedy;
 }
 
+bool Session::quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job,
+                                  Progress& progress) {
+  const double edge_length = target_edge_length() * factor;
+  try {
+    update_seamless_map(state, edge_length, component_face_sizes(state), progress);
+    update_tmesh(state, progress);
+    update_quantization(state, edge_length, target_quads / (factor * factor), options_.quantizer, progress);
+    update_integer_grid_map(state, job, progress);
+    update_quads(state, progress);
+    return true;
+  } catch (const Error& e) {
+    rethrow_unless_rung_failed(e);
+    return false;
+  }
+}
+
 bool Session::quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                                     Progress& progress) {
   for (const double factor : kFinerEdgeFactors) {
-    const double edge_length = target_edge_length() * factor;
-    try {
-      update_seamless_map(state, edge_length, component_face_sizes(state), progress);
-      update_tmesh(state, progress);
-      update_quantization(state, edge_length, target_quads / (factor * factor), options_.quantizer, progress);
-      update_integer_grid_map(state, job, progress);
-      update_quads(state, progress);
-      if (state.quads->extraction.quads.num_quads() > max_quads) return false;  // finer ones have more
-      state.finer_edge_factor = factor;
-      return true;
-    } catch (const Error& e) {
-      rethrow_unless_rung_failed(e);
-    }
+    if (!quad_at_edge_factor(state, factor, target_quads, job, progress)) continue;
+    if (state.quads->extraction.quads.num_quads() > max_quads) return false;  // finer ones have more
+    state.finer_edge_factor = factor;
+    return true;
+  }
+  return false;
+}
+
+bool Session::unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
+  const int flipped = state.quads->untangle.flipped_after;
+  for (const double factor : kFinerEdgeFactors) {
+    ComponentState finer = state;
+    if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
+    const int left = finer.quads->untangle.flipped_after;
+    if (left >= flipped) continue;
+    finer.finer_edge_factor = factor;
+    finer.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                std::to_string(flipped) +
+                                    " quad(s) stayed flipped against the surface at the density "
+                                    "asked (it folds within them)"};
+    state = std::move(finer);
+    return true;
   }
   return false;
 }
@@ -374,9 +399,16 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
 void Session::rescue_flipped_components(Progress& progress) {
   Timer timer;
   const std::vector<double> targets = rescue_quad_targets();
-  double budget = 0;
+  double budget = 0, quads_made = 0;
   for (const ComponentState& state : components_)
-    if (state.quadded()) budget += kFlipRescueShare * state.quad_choice().extraction.quads.num_quads();
+    if (state.quadded()) quads_made += state.quad_choice().extraction.quads.num_quads();
+  budget = kFlipRescueShare * quads_made;
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (!state.failure && state.quads->untangle.flipped_after > 0 &&
+        state.quads->extraction.quads.num_quads() <= kFinerFlipShare * quads_made)
+      unflip_at_finer_density(state, targets[c], progress);
+  }
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
     if (state.failure || state.quads->untangle.flipped_after == 0 || state.mesh.num_faces() > kFlipRescueMaxTriangles)

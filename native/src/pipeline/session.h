@@ -100,13 +100,18 @@ class Session {
   // Every component a remesh stage failed on is rescued by policy.h's failed-part ladder: quadded
   // at a finer density, or by splitting its triangles; throws when no component has quads.
   void rescue_failed_components(Job job, Progress& progress);
-  // Components whose quads stay flipped get their split triangles instead (policy.h:
-  // kFlipRescueShare).
+  // Components whose quads stay flipped are quadded at a finer density (policy.h: kFinerFlipShare)
+  // or get their split triangles instead (kFlipRescueShare).
   void rescue_flipped_components(Progress& progress);
   // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them;
   // false if none gives such quads.
   bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                              Progress& progress);
+  // The component's quads alone at `factor` of the quad edge length asked; false if a stage failed.
+  bool quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job, Progress& progress);
+  // A remesh component whose quads stay flipped, at the finer densities of kFinerEdgeFactors in
+  // turn: it takes the first one's quads that have fewer flipped (state unchanged otherwise).
+  bool unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress);
   void collect_grid_uvs();
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);
