@@ -117,7 +117,8 @@ def process(binding, blender_mesh, path, args):
         else:  # the operator selects the quads that face against the source surface
             entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
             if figures.get("rescued_parts", 0):
-                entry["reason"] = f"{figures['rescued_parts']} part(s) quadded finer or by splitting their triangles"
+                entry["reason"] = (f"{figures['rescued_parts']} part(s) quadded again: with another field, "
+                                   "finer or by splitting their triangles")
         if args.atlas:
             if "atlas" not in figures:
                 raise RuntimeError("no texture atlas: " + str(figures.get("atlas_note", "")))

@@ -424,15 +424,21 @@ void print_remesh_summary(const qgp::Json& report) {
               << "0-based face order of the output); the surface folds within them\n";
 }
 
+// How a rescued component was quadded, for its warning.
+std::string rescue_phrase(const qgp::Json& rescued) {
+  if (rescued["rescue"] == "split triangles") return "by splitting its triangles";
+  if (rescued["rescue"] == "finer density")
+    return "at " + rescued["edge_length_factor"].dump() + " of the quad edge length";
+  return "again with the cross field that keeps its close singularity pairs";
+}
+
 // Names the components whose layout gave no quads and how they were quadded (stderr).
 void print_rescued_components(const qgp::Json& report) {
   for (const auto& s : report.value("rescued_components", qgp::Json::array()))
     std::cerr << "qgp: warning: component " << s["component"] << " (" << s["triangles"] << " triangles) quadded "
-              << (s["rescue"] == "split triangles"
-                      ? std::string("by splitting its triangles")
-                      : "at " + s["edge_length_factor"].dump() + " of the quad edge length")
-              << " into " << s["quads"] << " quads, as its layout gave none valid: " << s["stage"].get<std::string>()
-              << ": " << s["message"].get<std::string>() << "\n";
+              << rescue_phrase(s) << " into " << s["quads"]
+              << " quads, as its layout gave none valid: " << s["stage"].get<std::string>() << ": "
+              << s["message"].get<std::string>() << "\n";
 }
 
 // Names the components kept as triangles (stderr); true if there are any.

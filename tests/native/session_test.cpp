@@ -279,9 +279,11 @@ TEST(SessionPipeline, NewDensityOnlyRequantizes) {
 }
 
 // A density whose edge length is more than kMaxSeamlessRescale times the seamless map's solves the
-// map again (the field stays): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at 8000
-// does (rescaled by 4 it had 6 658 quads and 1.35 % Hausdorff distance instead of 6 526 and 0.83 %;
-// since the count asked is kept, a fresh run has 7 990 quads and 1.25 %, measured 2026-11-27).
+// map again, and the cross field too (its close singularity pairs depend on the edge length,
+// policy.h kCancelPairsWithin): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at
+// 8000 does (rescaled by 4 it had 6 658 quads and 1.35 % Hausdorff distance instead of 6 526 and
+// 0.83 %; since the count asked is kept, a fresh run has 7 990 quads and 1.25 %, measured
+// 2026-11-27).
 TEST(SessionPipeline, LargeDensityChangeSolvesTheSeamlessMapAgain) {
   Session fresh(read_mesh_file(test::mesh_path("block.obj")));
   ASSERT_NO_FATAL_FAILURE(run_completed(fresh, Job::Remesh, 8000, 40));
@@ -290,8 +292,9 @@ TEST(SessionPipeline, LargeDensityChangeSolvesTheSeamlessMapAgain) {
   StageCounter counter;
   Progress counted = counter.progress();
   ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 8000, 40, &counted));
-  EXPECT_EQ(counter.updates["cross_field"], 0);
+  EXPECT_GT(counter.updates["cross_field"], 0);
   EXPECT_GT(counter.updates["seamless_map"], 0);
+  EXPECT_EQ(session.report()["field"], fresh.report()["field"]);
   EXPECT_EQ(session.report()["seamless"]["edge_length"], fresh.report()["seamless"]["edge_length"]);
   ASSERT_NE(session.quad_result(), nullptr);
   ASSERT_NE(fresh.quad_result(), nullptr);
@@ -533,8 +536,9 @@ TEST(SessionPipeline, RoundQuantizerEitherSucceedsOrSaysWhy) {
 // from the integer-grid map, and these from the layout, so that a broken map extraction, or a map
 // that starts working here, fails the test until this list is updated.
 bool quads_expected_from_layout(const std::string& name, double sharp, double target) {
-  static const std::set<std::string> runs = {"armadillo.obj@500",   "camelhead.off@500",   "stanford-bunny.obj@2000",
-                                             "wingnut.obj@2000@40", "joint_rem_p.obj@500", "fandisk.obj@2000"};
+  // fandisk at 2 000 took the layout's quads until close singularity pairs were cancelled (2026-12-02).
+  static const std::set<std::string> runs = {"armadillo.obj@500", "camelhead.off@500", "stanford-bunny.obj@2000",
+                                             "wingnut.obj@2000@40", "joint_rem_p.obj@500"};
   std::string run = name + "@" + std::to_string(static_cast<int>(target));
   if (sharp > 0) run += "@" + std::to_string(static_cast<int>(sharp));
   return runs.count(run) > 0;
@@ -639,7 +643,9 @@ TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
 // 2 889 quads (its 455 singular points allow no fewer near 2 000), 5 of them facing against the
 // surface on one machine and 16 on another (the same every run on each: the untangle's outcome on
 // this noisy scan turns on the last bits of the solvers' sums), so at most 1 % of them; 6.4 %
-// Hausdorff distance (measured 2026-11-27, with the count kept).
+// Hausdorff distance (measured 2026-11-27, with the count kept). Since 2026-12-02 the field cancels
+// close +1/-1 pairs: 227 singularities; the quads of that layout formed no valid mesh (2
+// non-manifold edges) and the part was quadded again with the field without (3 324 quads, 5 flipped).
 // Everything else a valid output promises holds; more flipped quads, or quads from the map, fail.
 TEST(SessionMeshes, NoisyScanKeepsItsKnownFlippedQuadsBounded) {
   Session session(read_mesh_file(test::mesh_path("dragon-genus1.obj")));
@@ -647,8 +653,15 @@ TEST(SessionMeshes, NoisyScanKeepsItsKnownFlippedQuadsBounded) {
   const QuadMesh* quads = session.quad_result();
   ASSERT_NE(quads, nullptr);
   const Json& report = session.report();
-  EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>());
-  EXPECT_EQ(report["extraction"]["layout_components"].get<int>(), 1);
+  if (report.contains("rescued_components")) {  // its quads with cancelled pairs did not form a valid mesh
+    const Json& rescued = report["rescued_components"][0];
+    EXPECT_EQ(rescued["rescue"], "field without cancelled pairs");
+    EXPECT_EQ(quads->num_quads(), rescued["quads"].get<int64_t>());
+    EXPECT_TRUE(report["field"]["components"][0]["close_pairs_kept"].get<bool>());
+  } else {
+    EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>());
+    EXPECT_EQ(report["extraction"]["layout_components"].get<int>(), 1);
+  }
   Progress progress;
   const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, -1, progress);
   std::cout << "dragon-genus1 @2000: " << m.quads << " quads, " << m.quad.flipped_quads() << " flipped, Hausdorff "

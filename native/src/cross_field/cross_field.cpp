@@ -2,19 +2,15 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/IterativeLinearSolvers>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <complex>
-#include <limits>
-#include <queue>
 #include <random>
 #include <string>
 
 #include "core/blas_kernels.h"
 #include "core/error.h"
+#include "cross_field/detail/singularity_edits.h"
 
 namespace qgp {
 namespace {
@@ -627,207 +623,6 @@ void compute_vertex_indices(const TriMesh& mesh, const std::vector<double>& eps,
                                             std::to_string(field.euler_characteristic) + " (internal error)");
 }
 
-// True for a closed surface of genus 1 (a torus: no boundary, Euler characteristic 0).
-bool is_closed_torus(const TriMesh& mesh, const CrossField& field) {
-  if (field.euler_characteristic != 0) return false;
-  for (int h = 0; h < mesh.num_halfedges(); ++h)
-    if (mesh.opposite[h] < 0) return false;
-  return true;
-}
-
-// Turns the matching of halfedge h (and its opposite) by s quarter turns; eps follows
-// (eps = mismatch - matching * 90deg). Index of from(h) - s, of to(h) + s.
-void turn_matching(const TriMesh& mesh, int h, int s, CrossField& field, std::vector<double>& eps) {
-  const int o = mesh.opposite[h];
-  eps[h] -= s * kQuarter;
-  eps[o] += s * kQuarter;
-  field.matching[h] = static_cast<int8_t>(mod4(field.matching[h] + s));
-  field.matching[o] = static_cast<int8_t>(mod4(field.matching[o] - s));
-}
-
-// Halfedges of a shortest path (in edge length) from vertex `from` to vertex `to` over ordinary
-// (not feature) edges, in order; empty if there is none.
-std::vector<int> shortest_ordinary_path(const TriMesh& mesh, const std::vector<char>& feature_edge, int from, int to) {
-  const int nv = mesh.num_vertices();
-  std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
-  std::vector<int> reached_by(nv, -1);
-  using Entry = std::pair<double, int>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  distance[from] = 0;
-  queue.push({0.0, from});
-  while (!queue.empty()) {
-    const auto [d, v] = queue.top();
-    queue.pop();
-    if (d > distance[v]) continue;
-    if (v == to) break;
-    for (int h : outgoing_halfedges(mesh, v)) {
-      if (feature_edge[mesh.edge_of[h]]) continue;
-      const int w = mesh.to(h);
-      const double dw = d + mesh.edge_vector(h).norm();
-      if (dw < distance[w]) distance[w] = dw, reached_by[w] = h, queue.push({dw, w});
-    }
-  }
-  if (reached_by[to] < 0) return {};
-  std::vector<int> path;
-  for (int v = to; v != from; v = mesh.from(reached_by[v])) path.push_back(reached_by[v]);
-  std::reverse(path.begin(), path.end());
-  return path;
-}
-
-// A torus field with exactly one singularity of index +1 and one of -1 has no seamless map without
-// folds: no quad mesh of the torus has exactly one vertex of valence 3 and one of valence 5
-// (Jucovic and Trenkler 1973), and it is the one cone configuration without any seamless
-// parametrization (Campen, Shen, Zhou and Zorin 2019). The pair is cancelled: one quarter turn
-// moved along the shortest ordinary path from the +1 to the -1 vertex. Returns true when it did.
-bool cancel_obstructed_pair(const TriMesh& mesh, CrossField& field, std::vector<double>& eps) {
-  if (field.num_singularities != 2) return false;
-  int plus = -1, minus = -1;
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    if (field.vertex_index[v] == 1) plus = v;
-    if (field.vertex_index[v] == -1) minus = v;
-  }
-  if (plus < 0 || minus < 0) return false;
-  const std::vector<int> path = shortest_ordinary_path(mesh, field.feature_edge, plus, minus);
-  if (path.empty()) return false;
-  for (int h : path) turn_matching(mesh, h, 1, field, eps);
-  ++field.num_cancelled_pairs;
-  return true;
-}
-
-// Handle loops of a closed mesh by tree-cotree (Eppstein 2003): a breadth-first spanning tree of the
-// vertices, one of the faces across the other edges, and the 2g edges left over. Left-over edge i
-// closes primal loop i (through the vertex tree) and dual loop i (through the face tree); primal
-// loop i crosses dual loop j once when i == j and never otherwise.
-struct HandleLoops {
-  std::vector<int> left_over;      // a halfedge of each left-over edge
-  std::vector<int> vertex_parent;  // #V: halfedge from the parent to the vertex (-1 at the root)
-  std::vector<int> face_parent;    // #F: halfedge of the parent face crossing into the face (-1)
-  std::vector<int> face_order;     // faces in breadth-first order (parents first)
-};
-
-HandleLoops handle_loops(const TriMesh& mesh) {
-  HandleLoops loops;
-  const int nv = mesh.num_vertices(), nf = mesh.num_faces();
-  std::vector<char> in_tree(mesh.num_edges(), 0), seen(nv, 0);
-  loops.vertex_parent.assign(nv, -1);
-  std::vector<int> queue{0};
-  seen[0] = 1;
-  for (size_t i = 0; i < queue.size(); ++i)
-    for (int h : outgoing_halfedges(mesh, queue[i]))
-      if (!seen[mesh.to(h)]) {
-        seen[mesh.to(h)] = 1, loops.vertex_parent[mesh.to(h)] = h, in_tree[mesh.edge_of[h]] = 1;
-        queue.push_back(mesh.to(h));
-      }
-  std::vector<char> reached(nf, 0), crossed(mesh.num_edges(), 0);
-  loops.face_parent.assign(nf, -1);
-  loops.face_order = {0};
-  reached[0] = 1;
-  for (size_t i = 0; i < loops.face_order.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      const int h = 3 * loops.face_order[i] + k, o = mesh.opposite[h];
-      if (o < 0 || in_tree[mesh.edge_of[h]] || reached[o / 3]) continue;
-      reached[o / 3] = 1, loops.face_parent[o / 3] = h, crossed[mesh.edge_of[h]] = 1;
-      loops.face_order.push_back(o / 3);
-    }
-  for (int e = 0; e < mesh.num_edges(); ++e)
-    if (!in_tree[e] && !crossed[e]) loops.left_over.push_back(mesh.edge_halfedge[e]);
-  return loops;
-}
-
-// Quarter turns (mod 4) of the field's matchings around each dual handle loop.
-std::vector<int> handle_holonomies(const TriMesh& mesh, const CrossField& field, const HandleLoops& loops) {
-  std::vector<int> turns_from_root(mesh.num_faces(), 0);
-  for (int f : loops.face_order)
-    if (loops.face_parent[f] >= 0)
-      turns_from_root[f] = turns_from_root[loops.face_parent[f] / 3] + field.matching[loops.face_parent[f]];
-  std::vector<int> holonomy;
-  for (int h : loops.left_over)
-    holonomy.push_back(mod4(turns_from_root[h / 3] + field.matching[h] - turns_from_root[mesh.opposite[h] / 3]));
-  return holonomy;
-}
-
-// A torus field without singularities whose matchings turn around a handle loop has no seamless
-// map without folds either: a flat torus without cones has no rotation around any loop. Each such
-// loop is untwisted by turning the matchings along the primal loop that crosses it once (vertex
-// indices unchanged). Only for fields without feature edges (their matchings are fixed by their
-// isoline sectors). Returns the number of loops untwisted.
-int untwist_handle_loops(const TriMesh& mesh, CrossField& field, std::vector<double>& eps) {
-  if (std::any_of(field.feature_edge.begin(), field.feature_edge.end(), [](char c) { return c; })) return 0;
-  const HandleLoops loops = handle_loops(mesh);
-  const std::vector<int> holonomy = handle_holonomies(mesh, field, loops);
-  int untwisted = 0;
-  for (size_t i = 0; i < loops.left_over.size(); ++i) {
-    if (holonomy[i] == 0) continue;
-    const int s = holonomy[i] == 3 ? 1 : -holonomy[i];
-    // The closed walk: the left-over edge, up the vertex tree to the root, down to its start.
-    const int h = loops.left_over[i];
-    turn_matching(mesh, h, s, field, eps);
-    for (int v = mesh.to(h); loops.vertex_parent[v] >= 0; v = mesh.from(loops.vertex_parent[v]))
-      turn_matching(mesh, mesh.opposite[loops.vertex_parent[v]], s, field, eps);
-    for (int v = mesh.from(h); loops.vertex_parent[v] >= 0; v = mesh.from(loops.vertex_parent[v]))
-      turn_matching(mesh, loops.vertex_parent[v], s, field, eps);
-    ++untwisted;
-  }
-  return untwisted;
-}
-
-// The field angles theta moved by the least change that minimizes the residual rotations' energy,
-// sum over ordinary edges of w_e eps_e^2 (w_e as in the power field), with the matchings kept and
-// the constrained faces fixed (face 0 when none is): the smoothest field with these matchings.
-// eps (3#F) is updated with theta.
-void smooth_with_fixed_matchings(const TriMesh& mesh, const FaceFrames& fr, const CrossField& field,
-                                 std::vector<double>& theta, std::vector<double>& eps) {
-  const int nf = mesh.num_faces();
-  std::vector<int> unknown(nf, -1);
-  int n = 0;
-  const bool anchored =
-      std::any_of(field.constrained_face.begin(), field.constrained_face.end(), [](char c) { return c; });
-  for (int f = anchored ? 0 : 1; f < nf; ++f)
-    if (!field.constrained_face[f]) unknown[f] = n++;
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
-  for (int e = 0; e < mesh.num_edges(); ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0 || field.feature_edge[e]) continue;
-    const int f = unknown[h / 3], g = unknown[o / 3];
-    const double w = 3 * mesh.edge_vector(h).squaredNorm() / (2 * (fr.area[h / 3] + fr.area[o / 3]));
-    // eps_h(theta + delta) = eps_h + delta_f - delta_g.
-    if (f >= 0) triplets.emplace_back(f, f, w), rhs[f] -= w * eps[h];
-    if (g >= 0) triplets.emplace_back(g, g, w), rhs[g] += w * eps[h];
-    if (f >= 0 && g >= 0) triplets.emplace_back(f, g, -w), triplets.emplace_back(g, f, -w);
-  }
-  Eigen::SparseMatrix<double> L(n, n);
-  L.setFromTriplets(triplets.begin(), triplets.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
-  if (solver.info() != Eigen::Success) return;  // the field keeps its angles (its matchings hold)
-  const Eigen::VectorXd delta = solver.solve(rhs);
-  auto moved = [&](int f) { return unknown[f] >= 0 ? delta[unknown[f]] : 0.0; };
-  for (int f = 0; f < nf; ++f) theta[f] += moved(f);
-  for (int e = 0; e < mesh.num_edges(); ++e) {
-    const int h = mesh.edge_halfedge[e], o = mesh.opposite[h];
-    if (o < 0 || field.feature_edge[e]) continue;
-    eps[h] += moved(h / 3) - moved(o / 3);
-    eps[o] = -eps[h];
-  }
-}
-
-// A closed torus's field that no seamless map can follow without folds (cancel_obstructed_pair,
-// untwist_handle_loops) is made one that can: its matchings changed, then the field smoothed with
-// them and its indices measured again. Returns true when it changed the field.
-bool make_torus_field_admissible(const TriMesh& mesh, const FaceFrames& fr, std::vector<double>& theta,
-                                 std::vector<double>& eps, const std::vector<double>& rho, CrossField& field) {
-  if (!is_closed_torus(mesh, field)) return false;
-  const bool cancelled = cancel_obstructed_pair(mesh, field, eps);
-  if (cancelled || field.num_singularities == 0) field.num_untwisted_loops = untwist_handle_loops(mesh, field, eps);
-  if (!cancelled && field.num_untwisted_loops == 0) return false;
-  smooth_with_fixed_matchings(mesh, fr, field, theta, eps);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    field.direction[f] = std::cos(theta[f]) * fr.e1[f] + std::sin(theta[f]) * fr.e2[f];
-  field.num_collapsed_sectors = field.index_sum = field.num_singularities = 0;
-  compute_vertex_indices(mesh, eps, rho, field);
-  return true;
-}
-
 }  // namespace
 
 std::vector<int> cone_quarter_turns(const TriMesh& mesh, const CrossField& field) {
@@ -906,7 +701,16 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
 
   compute_matchings(mesh, fr, theta, shift, field, eps);
   compute_vertex_indices(mesh, eps, rho, field);
-  make_torus_field_admissible(mesh, fr, theta, eps, rho, field);
+  // Singularities no layout keeps apart or no seamless map follows: removed, then measured again.
+  auto remeasure = [&]() {
+    for (int f = 0; f < nf; ++f) field.direction[f] = std::cos(theta[f]) * fr.e1[f] + std::sin(theta[f]) * fr.e2[f];
+    field.num_collapsed_sectors = field.index_sum = field.num_singularities = 0;
+    compute_vertex_indices(mesh, eps, rho, field);
+  };
+  field.num_close_pairs =
+      cross_field_detail::cancel_close_pairs(mesh, fr.area, options.cancel_pairs_within, theta, eps, field);
+  if (field.num_close_pairs > 0) remeasure();
+  if (cross_field_detail::make_torus_field_admissible(mesh, fr.area, theta, eps, field)) remeasure();
   progress.update(1.0);
   return field;
 }

@@ -42,6 +42,9 @@ struct CrossFieldOptions {
   std::vector<char> feature_edges;  // #E: caller's feature edges (Blender marked sharp); may be empty
   double sharp_angle_deg = -1;      // edges with a larger dihedral angle (angle between the two
                                     // face normals) are features; < 0: off
+  double cancel_pairs_within = 0;   // pairs of singularities of index +1 and -1 off features joined
+                                    // by ordinary edges no longer than this (model units) are
+                                    // cancelled (0: none)
 };
 
 struct CrossField {
@@ -93,11 +96,15 @@ struct CrossField {
                                        // neighbour: one matching (|residual| < 135deg) or one
                                        // edge_sector (|rho| < 90deg) per move (see
                                        // resolve_collapsed_sectors in cross_field.cpp)
+  int num_close_pairs = 0;             // pairs cancelled by cancel_pairs_within
   int num_cancelled_pairs = 0;         // a closed torus's fields that no seamless map follows
   int num_untwisted_loops = 0;         // without folds, made admissible (see
                                        // compute_cross_field): its one pair of singularities of
                                        // index +1 and -1 cancelled; its handle loops around which
                                        // a field without singularities turns untwisted
+  int num_turned_matchings = 0;        // matchings the pair cancellations and untwists turned by
+                                       // a quarter turn (counted per turn), each off the nearest
+                                       // quarter turn until the field is smoothed
   int num_singularities = 0;           // vertices with vertex_index != 0
   int index_sum = 0;                   // sum of vertex_index (quarter turns) = 4 * chi
   int euler_characteristic = 0;        // of the mesh

@@ -33,12 +33,13 @@ Quantized quantize_by_rounding_baseline(const ComponentState& state, double scal
 
 }  // namespace
 
-void update_cross_field(ComponentState& state, Progress& progress) {
-  if (state.field.computed_from({})) return;
+void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress) {
+  if (state.field.has_value() && field_serves(state.field.key(), edge_length, cancel_pairs)) return;
   CrossFieldOptions options;
   options.feature_edges = state.feature_edges;
   options.sharp_angle_deg = -1;  // dihedral features are already in feature_edges
-  state.field.store({}, compute_cross_field(state.mesh, options, progress));
+  options.cancel_pairs_within = cancel_pairs ? kCancelPairsWithin * edge_length : 0;
+  state.field.store({edge_length, cancel_pairs}, compute_cross_field(state.mesh, options, progress));
 }
 
 void update_cut_graph(ComponentState& state, Progress& progress) {

@@ -9,7 +9,9 @@
 namespace qgp {
 
 // Stage 1a, 1b: the cross field (hard-constrained on the component's feature edges) and its cut graph.
-void update_cross_field(ComponentState& state, Progress& progress);
+// cancel_pairs: the field with its close singularity pairs cancelled (policy.h kCancelPairsWithin);
+// a stored field without them serves either (see field_serves).
+void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress);
 void update_cut_graph(ComponentState& state, Progress& progress);
 // Stage 1c: the seamless map for quads of `edge_length` times face_size (the sizing field, #F, or
 // empty; a map solved for a nearby length and the same sizes is rescaled instead, see

@@ -98,6 +98,12 @@ struct PartFailure {
   std::string message;
 };
 
+struct FieldKey {
+  double edge_length = 0;    // target quad edge length its close singularity pairs were judged at
+  bool cancel_pairs = true;  // false: the field without cancelled pairs (policy.h)
+  bool operator==(const FieldKey& o) const { return edge_length == o.edge_length && cancel_pairs == o.cancel_pairs; }
+};
+
 struct SeamlessKey {
   uint64_t cut = 0;
   double edge_length = 0;  // target quad edge length the map was solved for (1 uv unit)
@@ -132,7 +138,7 @@ struct ComponentState {
   int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)
 
   // Stage results; each key names what it was computed from.
-  StageResult<CrossField, std::tuple<>> field;
+  StageResult<CrossField, FieldKey> field;
   StageResult<CutGraph, uint64_t> cut;             // field
   StageResult<SeamlessMap, SeamlessKey> seamless;  // cut, edge length
   StageResult<TracedMap, uint64_t> traced;         // seamless
@@ -144,11 +150,14 @@ struct ComponentState {
   std::optional<PartFailure> failure;
   // A failed component of a remesh job (failure says why) rescued by policy.h's failed-part ladder:
   // quadded at this fraction of the quad edge length asked (quads holds them), or else by splitting
-  // its triangles.
+  // its triangles; or first, at the density asked, with the field without cancelled close pairs.
   double finer_edge_factor = 1;
   std::optional<QuadChoice> split_quads;
+  bool without_cancelled_pairs = false;
   // Whether the component has quads in the last run: its own, or those of a rescue.
-  bool quadded() const { return !failure || finer_edge_factor < 1 || split_quads.has_value(); }
+  bool quadded() const {
+    return !failure || finer_edge_factor < 1 || split_quads.has_value() || without_cancelled_pairs;
+  }
   const QuadChoice& quad_choice() const { return split_quads ? *split_quads : *quads; }
 
   // Model units per uv unit of the seamless map.

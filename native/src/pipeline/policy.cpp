@@ -248,6 +248,20 @@ std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progr
 
 }  // namespace
 
+bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs) {
+  return (!stored.cancel_pairs || cancel_pairs) && seamless_map_serves(stored.edge_length, edge_length);
+}
+
+bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state) {
+  const SeamlessMapStats& s = state.seamless->stats;
+  return state.field->num_close_pairs > 0 && s.flipped_triangles + s.degenerate_triangles + s.winding_defects > 0;
+}
+
+bool retry_without_cancelled_pairs(const ComponentState& state) {
+  return state.failure && state.field.has_value() && state.field.key().cancel_pairs &&
+         state.field->num_close_pairs > 0 && finer_density_may_help(state.failure->stage);
+}
+
 bool seamless_map_serves(double solved_for, double edge_length) {
   const double rescale = solved_for / edge_length;
   return std::max(rescale, 1 / rescale) <= kMaxSeamlessRescale * (1 + 1e-9);
@@ -568,7 +582,9 @@ QuadChoice quads_of_split_triangles(const ComponentState& state, double target_q
   while (choice.untangle.flipped_after > 0 && choice.extraction.quads.num_quads() < 3 * state.mesh.num_faces() &&
          3 * kSplitFacesGrowth * max_faces <= max_quads) {
     max_faces = std::min(kSplitFacesGrowth * max_faces, double(state.mesh.num_faces()));
-    choice = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
+    QuadChoice finer = split_triangles_on_surface(state, static_cast<int>(max_faces), progress);
+    if (finer.untangle.flipped_after >= choice.untangle.flipped_after) break;  // more quads, no fewer flips
+    choice = std::move(finer);
   }
   const std::string defects = quad_mesh_defects(quad_topology(choice.extraction.quads), state.euler_characteristic);
   if (!defects.empty())

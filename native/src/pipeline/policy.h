@@ -20,7 +20,11 @@
 //   quads          choose_quads             the map's quads when the map is regular and they form a
 //                                           valid mesh; else (or when fewer stay flipped) the
 //                                           T-mesh layout's quads; else a refusal naming why
-//   failed part    quads_of_split_triangles a remesh part a stage failed on (StageFailed): its triangles,
+//   cross field    field_serves             the field with close +1/-1 pairs cancelled; the field
+//                                           without, where the seamless map then folds
+//   failed part    retry_without_cancelled_pairs   a remesh part that failed after its field
+//                                           cancelled close pairs: run again with the field without
+//                  quads_of_split_triangles a remesh part a stage failed on (StageFailed): its triangles,
 //                                           decimated to its quad budget, split into 3 quads each
 //                                           (decimated less, kSplitFacesGrowth times at a time,
 //                                           while quads are flipped)...
@@ -55,6 +59,27 @@ constexpr double kMaxSeamlessRescale = 2;
 // regions go on (ogre's part 43: a single bad triangle for 7 rounds, then none; under 1 s a round,
 // while the global solve took about 25 s there).
 constexpr int kSeamlessStagnantRounds = 4;
+// The cross field cancels pairs of singularities of index +1 and -1 (off features, at most 2 edges
+// apart) joined by a path of edges shorter than this share of the quad edge length: the layout
+// cannot keep them apart without a whole quad between them (a scan's noise makes many:
+// dragon-genus1's 20 000-triangle working mesh has 481 singularities, 312 of them next to one of
+// the other sign).
+constexpr double kCancelPairsWithin = 1.0;
+// A field made for one edge length serves another as the seamless map does (seamless_map_serves);
+// the field without cancelled pairs, the fallback below, serves whichever is asked.
+bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs);
+// A field whose cancelled pairs leave its seamless map folded (flipped or degenerate triangles,
+// wound one-rings: the curvature they held has nowhere to go) gives way to the field without
+// cancelled pairs (dragon-genus1 at 500 quads: 1 flipped triangle after 24 repair rounds with
+// 125 pairs cancelled; none without).
+bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state);
+// A remesh part that failed at quantization, the integer-grid map or quad extraction with a field
+// whose close pairs were cancelled is first run again, at the density asked, with the field
+// without cancelled pairs, before the rescues below (dragon-genus1 at 2 000 quads: 123 pairs
+// cancelled, its extracted quads had 2 non-manifold edges, and the split-triangle rescue made
+// 8 004 quads with 3 876 irregular vertices).
+bool retry_without_cancelled_pairs(const ComponentState& state);
+
 // Re-quantizations against a folding layout.
 constexpr int kMaxFoldRounds = 8;
 // Re-quantizations against layout quads flipped against the surface, and how many cells away from
@@ -184,8 +209,9 @@ constexpr int kFlipRescueMaxTriangles = 1000;
 // decimated toward target_quads / 3 (topology and feature curves kept), each split into 3 quads
 // (quad_extraction/split_triangles.h) and projected onto the input surface. While the split leaves
 // quads flipped, the triangles are decimated to kSplitFacesGrowth times more faces, up to none
-// removed or more than max_quads quads. Throws Error(StageFailed) if the quads do not form a valid
-// mesh.
+// removed or more than max_quads quads, while each step leaves fewer flipped (dragon-genus1 at
+// 2 000 quads grew to all its 100 000 triangles, 60 000 quads, and kept 7 flipped). Throws
+// Error(StageFailed) if the quads do not form a valid mesh.
 constexpr double kSplitFacesGrowth = 4;
 QuadChoice quads_of_split_triangles(const ComponentState& state, double target_quads, Progress& progress,
                                     double max_quads = std::numeric_limits<double>::infinity());

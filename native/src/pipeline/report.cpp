@@ -81,6 +81,8 @@ Json field_report(const std::vector<ComponentState>& components) {
                              {"feature_edges", features},
                              {"overconstrained_faces", field.num_overconstrained_faces},
                              {"collapsed_sectors", field.num_collapsed_sectors},
+                             {"close_pairs", field.num_close_pairs},
+                             {"close_pairs_kept", !state.field.key().cancel_pairs},
                              {"cancelled_pairs", field.num_cancelled_pairs},
                              {"untwisted_loops", field.num_untwisted_loops},
                              {"cut_edges", state.cut->num_cut_edges}});

@@ -344,6 +344,19 @@ bool Session::quad_at_edge_factor(ComponentState& state, double factor, double t
   }
 }
 
+bool Session::quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress) {
+  try {
+    update_cross_field(state, target_edge_length(), false, progress);
+    update_cut_graph(state, progress);
+  } catch (const Error& e) {
+    rethrow_unless_rung_failed(e);
+    return false;
+  }
+  if (!quad_at_edge_factor(state, 1, target_quads, job, progress)) return false;
+  state.without_cancelled_pairs = true;
+  return true;
+}
+
 bool Session::quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                                     Progress& progress) {
   for (const double factor : kFinerEdgeFactors) {
@@ -381,6 +394,7 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
     ComponentState& state = components_[c];
     if (!state.failure || state.failure->code != ErrorCode::StageFailed) continue;  // e.g. a degenerate part
     const double target = targets[c];
+    if (retry_without_cancelled_pairs(state) && quad_without_cancelled_pairs(state, target, job, progress)) continue;
     try {
       state.split_quads = quads_of_split_triangles(state, target, progress);
     } catch (const Error& e) {
@@ -434,6 +448,12 @@ void Session::rescue_flipped_components(Progress& progress) {
   rescue_seconds = rescue_seconds.get<double>() + timer.seconds();  // after rescue_failed_components'
 }
 
+void Session::mark_fields_without_cancelled_pairs() {
+  Json& per_component = report_["field"]["components"];
+  for (size_t c = 0; c < components_.size(); ++c)
+    if (components_[c].without_cancelled_pairs) per_component[c]["close_pairs_kept"] = true;
+}
+
 void Session::throw_if_every_component_failed() const {
   if (components_.empty()) throw Error(ErrorCode::InvalidMesh, "no part of the mesh is left to remesh");
   for (const ComponentState& state : components_)
@@ -448,16 +468,23 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
     state.failure.reset();
     state.split_quads.reset();
     state.finer_edge_factor = 1;
+    state.without_cancelled_pairs = false;
   }
   report_["working_mesh"] = working_mesh_report(components_);
   add_preparation_repairs();
   const double edge_length = target_edge_length();
-  for_each_component(job, "cross_field", progress, [&](ComponentState& s) { update_cross_field(s, progress); });
+  for_each_component(job, "cross_field", progress,
+                     [&](ComponentState& s) { update_cross_field(s, edge_length, true, progress); });
   for_each_component(job, "cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
   report_["field"] = field_report(components_);
   for_each_component(job, "seamless_map", progress, [&](ComponentState& s) {
     update_seamless_map(s, edge_length, component_face_sizes(s), progress);
+    if (!seamless_map_folds_where_pairs_were_cancelled(s)) return;
+    update_cross_field(s, edge_length, false, progress);
+    update_cut_graph(s, progress);
+    update_seamless_map(s, edge_length, component_face_sizes(s), progress);
   });
+  report_["field"] = field_report(components_);  // again: a component may have fallen back
   report_["seamless"] = seamless_report(components_, edge_length);
   for_each_component(job, "tmesh", progress, [&](ComponentState& s) { update_tmesh(s, progress); });
   report_["tmesh"] = tmesh_report(components_);
@@ -477,6 +504,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
     if (rescues_failed_components(job)) {
       rescue_failed_components(job, progress);
       rescue_flipped_components(progress);
+      mark_fields_without_cancelled_pairs();
     }
   }
   if (!half_) collect_grid_uvs();  // the map of the input's own triangles (a half has other triangles)
@@ -495,9 +523,17 @@ void Session::note_rescued_components(Json rescued) {
   count["note"] = made + std::to_string(rescued.size()) +
                   " part(s) rescued (their layouts gave no valid quads, or flipped ones) with " +
                   std::to_string(quads) +
-                  " quads, at a finer density or by splitting their triangles (report: rescued_components)";
+                  " quads, with the field without cancelled singularity pairs, at a finer density or by "
+                  "splitting their triangles (report: rescued_components)";
   report_["rescued_components"] = std::move(rescued);
 }
+
+namespace {
+const char* rescue_name(const ComponentState& state) {
+  if (state.split_quads) return "split triangles";
+  return state.finer_edge_factor < 1 ? "finer density" : "field without cancelled pairs";
+}
+}  // namespace
 
 void Session::report_failed_components() {
   Json failed = Json::array(), rescued = Json::array();
@@ -509,7 +545,7 @@ void Session::report_failed_components() {
       rescued.push_back({{"component", c},
                          {"triangles", intake_->components[c].faces.size()},
                          {"quads", state.quad_choice().extraction.quads.num_quads()},
-                         {"rescue", state.split_quads ? "split triangles" : "finer density"},
+                         {"rescue", rescue_name(state)},
                          {"edge_length_factor", state.finer_edge_factor},
                          {"stage", failure->stage},
                          {"code", error_code_name(failure->code)},

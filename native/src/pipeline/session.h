@@ -98,7 +98,8 @@ class Session {
   // length was asked, its area over the edge length squared.
   std::vector<double> rescue_quad_targets() const;
   // Every component a remesh stage failed on is rescued by policy.h's failed-part ladder: quadded
-  // at a finer density, or by splitting its triangles; throws when no component has quads.
+  // with the field without cancelled pairs, at a finer density, or by splitting its triangles;
+  // throws when no component has quads.
   void rescue_failed_components(Job job, Progress& progress);
   // Components whose quads stay flipped are quadded at a finer density (policy.h: kFinerFlipShare)
   // or get their split triangles instead (kFlipRescueShare).
@@ -107,6 +108,11 @@ class Session {
   // false if none gives such quads.
   bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                              Progress& progress);
+  // The field report's close_pairs_kept for the parts quad_without_cancelled_pairs rescued.
+  void mark_fields_without_cancelled_pairs();
+  // The component's quads at the density asked with the field without cancelled close pairs;
+  // false if a stage failed.
+  bool quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress);
   // The component's quads alone at `factor` of the quad edge length asked; false if a stage failed.
   bool quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job, Progress& progress);
   // A remesh component whose quads stay flipped, at the finer densities of kFinerEdgeFactors in
