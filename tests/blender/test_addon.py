@@ -639,19 +639,20 @@ def test_grid_uv_seams_off():
 
 
 def test_grid_uv_flip_free_copy(binding):
-    """joint at 300 quads: its global map keeps flipped triangles, so Flip-Free Copy writes a new
-    object (the layout's edges inserted) whose map has none; without it, the source gets the map."""
+    """spot at 200 quads: its global map keeps 2 wound one-rings (joint at 300 quads, used here until
+    2026-12-02, now has a regular map), so Flip-Free Copy writes a new object (the layout's edges
+    inserted) whose map has none; without it, the source gets the map."""
     reset_scene()
-    joint = import_mesh(binding, "joint.obj")
-    before = [tuple(v.co) for v in joint.data.vertices]
-    result = bpy.ops.object.qgp_grid_uv(target_faces=300, quads_per_unit=2.0)
+    spot = import_mesh(binding, "spot.obj")
+    before = [tuple(v.co) for v in spot.data.vertices]
+    result = bpy.ops.object.qgp_grid_uv(target_faces=200, quads_per_unit=2.0)
     assert result == {"FINISHED"}, result
-    copy = bpy.data.objects.get("joint_grid_uv")
+    copy = bpy.data.objects.get("spot_grid_uv")
     assert copy is not None, [o.name for o in bpy.data.objects]
-    assert "QGP Grid" not in joint.data.uv_layers and [tuple(v.co) for v in joint.data.vertices] == before
-    assert copy.matrix_world == joint.matrix_world and bpy.context.active_object == copy
+    assert "QGP Grid" not in spot.data.uv_layers and [tuple(v.co) for v in spot.data.vertices] == before
+    assert copy.matrix_world == spot.matrix_world and bpy.context.active_object == copy
     mesh = copy.data
-    assert len(mesh.polygons) > len(joint.data.polygons) and all(len(p.vertices) == 3 for p in mesh.polygons)
+    assert len(mesh.polygons) > len(spot.data.polygons) and all(len(p.vertices) == 3 for p in mesh.polygons)
     layer = mesh.uv_layers["QGP Grid"]
     uv = [(d.uv[0] * 2.0, d.uv[1] * 2.0) for d in layer.data]
     areas = []
@@ -663,25 +664,25 @@ def test_grid_uv_flip_free_copy(binding):
     assert flipped == 0, flipped
     residual = grid_seam_residual(mesh, layer, 2.0)
     assert residual < 1e-3, residual
-    print(f"{copy.name}: flip-free grid UVs on {len(mesh.polygons)} triangles (source {len(joint.data.polygons)}), "
+    print(f"{copy.name}: flip-free grid UVs on {len(mesh.polygons)} triangles (source {len(spot.data.polygons)}), "
           f"uv area {sum(areas):.1f} quads, transition residual {residual:.2e}, source unchanged")
     assert not seam_edges(mesh), "Mark Seams is off"
     assert copy["qgp"]["refined_components"] >= 1 and copy["qgp"]["seams"] == 0, copy["qgp"].to_dict()
-    select_only(joint)
-    result = bpy.ops.object.qgp_grid_uv(target_faces=300, flip_free_copy=False)
+    select_only(spot)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=200, flip_free_copy=False)
     assert result == {"FINISHED"}, result
-    assert "QGP Grid" in joint.data.uv_layers and bpy.data.objects.get("joint_grid_uv.001") is None
+    assert "QGP Grid" in spot.data.uv_layers and bpy.data.objects.get("spot_grid_uv.001") is None
     # Mark Seams with a Flip-Free Copy: the copy's seams are its UV islands' inner boundaries; the
     # source keeps none.
-    select_only(joint)
-    result = bpy.ops.object.qgp_grid_uv(target_faces=300, quads_per_unit=2.0, mark_seams=True)
+    select_only(spot)
+    result = bpy.ops.object.qgp_grid_uv(target_faces=200, quads_per_unit=2.0, mark_seams=True)
     assert result == {"FINISHED"}, result
-    copy = bpy.data.objects["joint_grid_uv.001"]
+    copy = bpy.data.objects["spot_grid_uv.001"]
     seams = seam_edges(copy.data)
     islands = uv_cut_edges(copy.data, copy.data.uv_layers["QGP Grid"], 1e-4 / 2.0)
     assert seams and seams == islands, (len(seams), len(islands), len(seams - islands), len(islands - seams))
     assert copy["qgp"]["seams"] == len(seams), (copy["qgp"].to_dict(), len(seams))
-    assert not seam_edges(joint.data), "the source got seams"
+    assert not seam_edges(spot.data), "the source got seams"
     print(f"{copy.name}: {len(seams)} seams marked on the copy, none on the source")
 
 
@@ -715,19 +716,19 @@ def test_batch():
 
 def test_batch_success():
     out = tempfile.mkdtemp(prefix="qgp_batch_")
-    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off", "joint.obj")]
-    proc, report = run_batch(BATCH, inputs, out, "--faces", "300", "--uv", "--atlas", "512")
+    inputs = [os.path.join(MESHES, n) for n in ("torus.obj", "bunny.off", "spot.obj")]
+    proc, report = run_batch(BATCH, inputs, out, "--faces", "200", "--uv", "--atlas", "512")
     status = {os.path.basename(e["input"]): e["status"] for e in report["entries"]}
-    assert status == {"torus.obj": "ok", "bunny.off": "ok", "joint.obj": "ok"}, (status, proc.stderr[-2000:])
+    assert status == {"torus.obj": "ok", "bunny.off": "ok", "spot.obj": "ok"}, (status, proc.stderr[-2000:])
     assert proc.returncode == 0 and report["failed"] == 0 and report["partial"] == 0, (proc.returncode, report)
     flipped = {os.path.basename(e["input"]): e["flipped_quads"] for e in report["entries"]}
-    assert flipped == {"torus.obj": 0, "bunny.off": 0, "joint.obj": 0}, flipped
-    # joint at 300 quads: only the refined copy has a flip-free map; its triangles are written.
+    assert flipped == {"torus.obj": 0, "bunny.off": 0, "spot.obj": 0}, flipped
+    # spot at 200 quads: only the refined copy has a flip-free map; its triangles are written.
     refined = {os.path.basename(e["input"]): e.get("uv_refined") for e in report["entries"]}
-    assert refined == {"torus.obj": False, "bunny.off": False, "joint.obj": True}, refined
-    joint_uv = [line for line in open(os.path.join(out, "joint_uv.obj")) if line.startswith("f ")]
-    assert len(joint_uv) > 446 and all(len(line.split()) == 4 for line in joint_uv), len(joint_uv)
-    for name in ("torus", "bunny", "joint"):
+    assert refined == {"torus.obj": False, "bunny.off": False, "spot.obj": True}, refined
+    spot_uv = [line for line in open(os.path.join(out, "spot_uv.obj")) if line.startswith("f ")]
+    assert len(spot_uv) > 5856 and all(len(line.split()) == 4 for line in spot_uv), len(spot_uv)
+    for name in ("torus", "bunny", "spot"):
         path = os.path.join(out, name + ".obj")
         faces = [line for line in open(path) if line.startswith("f ")]
         assert faces and all(len(line.split()) == 5 and "/" in line for line in faces), path
