@@ -86,7 +86,8 @@ def _quad_figures(report):
     """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
     has exactly), count_note (why it is more than 5 % off the count asked, or ""), where each
     component's quads come from (quad_paths: 'integer-grid map' or
-    'T-mesh layout (why)', 'rescued: split triangles' or 'rescued: finer density' for a part whose
+    'T-mesh layout (why)', 'rescued: split triangles', 'rescued: finer density' or 'rescued: field
+    without cancelled pairs' for a part whose
     layout gave no quads, or 'kept as triangles'), how many components used the layout, the parts
     rescued (rescued_parts), the parts kept as triangles (kept_parts, kept_triangles: added after the
     quads), the planes the quads are mirror-symmetric about (symmetry: "", "x", "xz", ...) and the
@@ -499,7 +500,7 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
             message += f"; {obj['qgp']['count_note']}"
         rescued = report.get("rescued_components", [])
-        if rescued:  # parts whose layout gave no quads, quadded finer or by splitting their triangles
+        if rescued:  # parts whose layout gave no quads, quadded again (another field, finer or split)
             message += f"; rescued: {_failed_parts(rescued)}"
         failed = report.get("failed_components", [])
         if failed:  # the parts kept as triangles are selected, so Edit Mode shows them
