@@ -85,13 +85,12 @@ def _failed_parts(failed, shown=3):
 def _quad_figures(report):
     """The quad remesh's figures: quads_expected (the quantization's quad count, which the mesh
     has exactly), count_note (why it is more than 5 % off the count asked, or ""), where each
-    component's quads come from (quad_paths: 'integer-grid map' or
-    'T-mesh layout (why)', 'rescued: split triangles', 'rescued: finer density' or 'rescued: field
-    without cancelled pairs' for a part whose
-    layout gave no quads, or 'kept as triangles'), how many components used the layout, the parts
-    rescued (rescued_parts), the parts kept as triangles (kept_parts, kept_triangles: added after the
-    quads), the planes the quads are mirror-symmetric about (symmetry: "", "x", "xz", ...) and the
-    quality figures."""
+    component's quads come from (quad_paths: 'integer-grid map' or 'T-mesh layout (why)',
+    'rescued: split triangles', 'rescued: finer density' or 'rescued: field without cancelled
+    pairs' for a part whose layout gave no quads, or 'kept as triangles'), how many components used
+    the layout, the parts rescued (rescued_parts), the parts kept as triangles (kept_parts,
+    kept_triangles: added after the quads), the planes the quads are mirror-symmetric about
+    (symmetry: "", "x", "xz", ...) and the quality figures."""
     extraction = report.get("extraction", {})
     quad = report.get("quad", {})
     failed = report.get("failed_components", [])
