@@ -101,7 +101,6 @@ struct PartFailure {
 struct FieldKey {
   double edge_length = 0;    // target quad edge length its close singularity pairs were judged at
   bool cancel_pairs = true;  // false: the field without cancelled pairs (policy.h)
-  bool operator==(const FieldKey& o) const { return edge_length == o.edge_length && cancel_pairs == o.cancel_pairs; }
 };
 
 struct SeamlessKey {

@@ -66,7 +66,7 @@ constexpr int kSeamlessStagnantRounds = 4;
 // the other sign).
 constexpr double kCancelPairsWithin = 1.0;
 // A field made for one edge length serves another as the seamless map does (seamless_map_serves);
-// the field without cancelled pairs, the fallback below, serves whichever is asked.
+// the field without cancelled pairs, the fallback below, serves a request with or without them.
 bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs);
 // A field whose cancelled pairs leave its seamless map folded (flipped or degenerate triangles,
 // wound one-rings: the curvature they held has nowhere to go) gives way to the field without
