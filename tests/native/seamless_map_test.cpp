@@ -291,13 +291,8 @@ TEST(SeamlessMap, ReproducesExactGridMaps) {
   }
 }
 
-TEST(SeamlessMap, WindingDefectsCountOneRingsAFullTurnOffTheirCone) {
-  auto cube = test::make_grid_cube(4);
-  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
-  const SeamlessMap c = run(cube.mesh, in, 1.0, "exact cube");
-  EXPECT_EQ(c.stats.winding_defects, 0);  // every one-ring winds as the field's cone
-  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.0);
-  // The exact cube map's own cones (3 quarter turns at the 8 corners, 4 elsewhere).
+// The exact cube map's cone angles in quarter turns (3 at the 8 corners, 4 elsewhere).
+std::vector<int> cube_cones(const test::SyntheticParametrized& cube) {
   std::vector<double> angle(cube.mesh.num_vertices(), 0.0);
   for (int f = 0; f < cube.mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
@@ -307,6 +302,16 @@ TEST(SeamlessMap, WindingDefectsCountOneRingsAFullTurnOffTheirCone) {
     }
   std::vector<int> cone(cube.mesh.num_vertices());
   for (int v = 0; v < cube.mesh.num_vertices(); ++v) cone[v] = static_cast<int>(std::lround(angle[v] / (M_PI / 2)));
+  return cone;
+}
+
+TEST(SeamlessMap, WindingDefectsCountOneRingsAFullTurnOffTheirCone) {
+  auto cube = test::make_grid_cube(4);
+  const FieldInput in = field_from_param(cube.mesh, cube.param, true);
+  const SeamlessMap c = run(cube.mesh, in, 1.0, "exact cube");
+  EXPECT_EQ(c.stats.winding_defects, 0);  // every one-ring winds as the field's cone
+  ParametrizationProblem problem(cube.mesh, in.cut.rotation, in.cut.is_cut, in.cut.frame_u, 1.0);
+  std::vector<int> cone = cube_cones(cube);  // the exact cube map's own cones
   int corners = 0;
   for (int k : cone) corners += k == 3;
   EXPECT_EQ(corners, 8);
@@ -558,6 +563,26 @@ TEST(ParametrizationProblem, RegionStagnationEndsRoundsOverMostOfTheMesh) {
   ASSERT_GE(bad.size(), 5u);
   const int before = *std::min_element(bad.begin(), bad.end() - 4);
   for (auto it = bad.end() - 4; it != bad.end(); ++it) EXPECT_GE(*it, before);
+}
+
+TEST(ParametrizationProblem, FieldFrameSolveCanBeLeftToTheCaller) {
+  // With cone angles, a local repair that leaves bad faces (the pinned folds) is followed by one
+  // global solve in the field's frame and more local rounds; without it (a caller with a fallback,
+  // as the pipeline's first map of a field with cancelled singularity pairs) the repair ends after
+  // the local rounds, and the stagnation bound ends those early.
+  CubeProblem p;
+  pin_clockwise_faces(p);
+  p.problem.set_cone_angles(cube_cones(p.cube));
+  ParametrizationSolveOptions full;
+  const ParametrizationSolution with_global = p.problem.solve(full, p.progress);
+  ParametrizationSolveOptions local = full;
+  local.field_frame_solve = false;
+  local.count_stagnation_rounds = 4;
+  const ParametrizationSolution local_only = p.problem.solve(local, p.progress);
+  for (const ParametrizationSolution* s : {&with_global, &local_only}) expect_pinned_faces_folded(*s);
+  EXPECT_EQ(with_global.stats.field_frame_solves, 1);
+  EXPECT_EQ(local_only.stats.field_frame_solves, 0);
+  EXPECT_LT(local_only.stats.repair_rounds, with_global.stats.repair_rounds);
 }
 
 // ---------------------------------------------------------------------------------------------

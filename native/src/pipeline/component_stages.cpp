@@ -56,6 +56,7 @@ void update_seamless_map(ComponentState& state, double edge_length, std::vector<
   options.edge_length = edge_length;
   options.face_size = std::move(face_size);
   options.region_stagnation_rounds = kSeamlessStagnantRounds;
+  bound_repair_where_pairs_were_cancelled(state, options);
   state.seamless.store({state.cut.id(), edge_length, sizing},
                        compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
 }

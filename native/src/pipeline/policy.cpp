@@ -257,6 +257,12 @@ bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state) 
   return state.field->num_close_pairs > 0 && s.flipped_triangles + s.degenerate_triangles + s.winding_defects > 0;
 }
 
+void bound_repair_where_pairs_were_cancelled(const ComponentState& state, SeamlessMapOptions& options) {
+  if (!state.field.key().cancel_pairs || state.field->num_close_pairs == 0) return;
+  options.count_stagnation_rounds = kCancelledPairsStagnantRounds;
+  options.field_frame_solve = false;
+}
+
 bool retry_without_cancelled_pairs(const ComponentState& state) {
   return state.failure && state.field.has_value() && state.field.key().cancel_pairs &&
          state.field->num_close_pairs > 0 && finer_density_may_help(state.failure->stage);

@@ -965,7 +965,7 @@ void ParametrizationProblem::Solver::repair() {
 // the field's frame (Bommes et al. 2013), elastically; then local repair again.
 bool ParametrizationProblem::Solver::field_frame_solve() {
   if (current_.bad() == 0 || problem_.cone_quarter_turns_.empty() || options_.regularity == RegularityMode::AllFaces ||
-      !options_.winding_repair)
+      !options_.winding_repair || !options_.field_frame_solve)
     return false;
   Census all = current_;
   all.field_frame = true;

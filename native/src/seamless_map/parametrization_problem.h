@@ -76,6 +76,8 @@ struct ParametrizationSolveOptions {
   bool winding_repair = true;                  // with cone angles: one-rings wound a full turn off their cone are
                                                // bad faces; when the local repair leaves bad faces, one global
                                                // solve in the field's frame, then max_repair_rounds / 2 more rounds
+  bool field_frame_solve = true;               // with winding_repair: the global solve above (false: the
+                                               // local repair only, for callers with a fallback)
   int relinearization_rounds = 3;              // at most this many re-linearizations once regular
   double relinearization_tolerance = 1e-3;     // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;

@@ -123,7 +123,9 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   solve_options.regularity = options.regularity ? RegularityMode::Repair : RegularityMode::Off;
   solve_options.max_repair_rounds = options.max_repair_rounds;
   solve_options.region_stagnation_rounds = options.region_stagnation_rounds;
+  solve_options.count_stagnation_rounds = options.count_stagnation_rounds;
   solve_options.winding_repair = options.winding_repair;
+  solve_options.field_frame_solve = options.field_frame_solve;
   ParametrizationSolution solution = problem->solve(solve_options, progress);
 
   SeamlessMap out;

@@ -17,7 +17,9 @@ struct SeamlessMapOptions {
   bool regularity = true;            // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
   int max_repair_rounds = 24;        // Ipopt repair rounds at most (see ParametrizationSolveOptions)
   int region_stagnation_rounds = 0;  // see ParametrizationSolveOptions
+  int count_stagnation_rounds = 0;   // see ParametrizationSolveOptions
   bool winding_repair = true;        // see ParametrizationSolveOptions
+  bool field_frame_solve = true;     // see ParametrizationSolveOptions
 };
 
 struct SeamlessMapStats {
