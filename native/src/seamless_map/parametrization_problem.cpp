@@ -1023,11 +1023,7 @@ bool ParametrizationProblem::Solver::repair_step(int round, RepairTrack& track) 
   const Eigen::VectorXd y = solve_region(region_, active_, z_, current_, strategy, pb_ + span_ * t0,
                                          pb_ + span_ * (t0 + 0.5 / rounds_), &status);
   Census next = census(y);
-  // A round whose pose let unconstrained faces go bad is rejected, and counts toward the bounds
-  // like a round without fewer bad faces (block at 60 degrees, 2 000 quads: the integer-grid map's
-  // first five rounds, 5-6 s each, were all rejected at 1 304 bad triangles and five more followed;
-  // it now stops after the fifth, 65.8 -> 36.2 s, the same quads from the layout).
-  if (reject_escaped(next)) return !(stagnates(round, track) || stops_halving());
+  if (reject_escaped(next)) return true;
   // Keep the new pose when it has fewer bad faces or they are less bad.
   const bool accepted = next.bad() < current_.bad() || next.depth < current_.depth;
   if (accepted) {
