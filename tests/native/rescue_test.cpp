@@ -11,6 +11,7 @@
 #include "intake/polygon_soup.h"
 #include "intake/read_mesh_file.h"
 #include "metrics/quad_metrics.h"
+#include "pipeline/policy.h"
 #include "pipeline/session.h"
 #include "quad_extraction/split_triangles.h"
 #include "test_support.h"
@@ -202,6 +203,24 @@ TEST(Rescue, CountSearchNeverKeepsAnEmptyLayout) {
     EXPECT_FALSE(report.contains("rescued_components"));
     EXPECT_GT(report["quantization"]["components"][0]["quads_expected"].get<int64_t>(), 0);
   }
+}
+
+// The first seamless map of a field with cancelled close pairs has a fallback (the field without
+// them), so its repair is cut short; every other map keeps the full repair.
+TEST(Rescue, OnlyAFieldWithCancelledPairsGetsTheShortRepair) {
+  for (const bool cancelled : {true, false})
+    for (const int pairs : {0, 3}) {
+      ComponentState state;
+      CrossField field;
+      field.num_close_pairs = pairs;
+      state.field.store({1.0, cancelled}, field);
+      SeamlessMapOptions options;
+      bound_repair_where_pairs_were_cancelled(state, options);
+      const bool short_repair = cancelled && pairs > 0;
+      EXPECT_EQ(options.field_frame_solve, !short_repair) << cancelled << " " << pairs;
+      EXPECT_EQ(options.count_stagnation_rounds, short_repair ? kCancelledPairsStagnantRounds : 0);
+      EXPECT_EQ(options.max_repair_rounds, SeamlessMapOptions{}.max_repair_rounds);
+    }
 }
 
 // A mesh whose every triangle has zero area is not "rescued" into zero-area quads: intake refuses it
