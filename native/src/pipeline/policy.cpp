@@ -246,6 +246,11 @@ std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progr
   return choice;
 }
 
+// The component's field has close +1/-1 pairs cancelled (the field without them is its fallback).
+bool field_cancelled_pairs(const ComponentState& state) {
+  return state.field.has_value() && state.field.key().cancel_pairs && state.field->num_close_pairs > 0;
+}
+
 }  // namespace
 
 bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs) {
@@ -254,18 +259,17 @@ bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs)
 
 bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state) {
   const SeamlessMapStats& s = state.seamless->stats;
-  return state.field->num_close_pairs > 0 && s.flipped_triangles + s.degenerate_triangles + s.winding_defects > 0;
+  return field_cancelled_pairs(state) && s.flipped_triangles + s.degenerate_triangles + s.winding_defects > 0;
 }
 
 void bound_repair_where_pairs_were_cancelled(const ComponentState& state, SeamlessMapOptions& options) {
-  if (!state.field.key().cancel_pairs || state.field->num_close_pairs == 0) return;
+  if (!field_cancelled_pairs(state)) return;
   options.count_stagnation_rounds = kCancelledPairsStagnantRounds;
   options.field_frame_solve = false;
 }
 
 bool retry_without_cancelled_pairs(const ComponentState& state) {
-  return state.failure && state.field.has_value() && state.field.key().cancel_pairs &&
-         state.field->num_close_pairs > 0 && finer_density_may_help(state.failure->stage);
+  return state.failure && field_cancelled_pairs(state) && finer_density_may_help(state.failure->stage);
 }
 
 bool seamless_map_serves(double solved_for, double edge_length) {
