@@ -584,6 +584,7 @@ ParametrizationSolution IntegerGridMapSolver::solve_all_faces(double begin, doub
 
 void IntegerGridMapSolver::count_solves(const ParametrizationSolution& solution) {
   stats_.ipopt_solves += solution.stats.ipopt_solves;
+  stats_.qp_by_ipopt += solution.stats.qp_by_ipopt;
   stats_.ipopt_iterations += solution.stats.ipopt_iterations;
 }
 

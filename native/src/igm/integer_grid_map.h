@@ -98,6 +98,7 @@ struct IgmStats {
   int64_t parametric_area = 0;               // Σ triangle areas in uv, in quad units (== quads_expected)
   bool area_is_integral = true;
   int ipopt_solves = 0, ipopt_iterations = 0;  // all attempts so far
+  int qp_by_ipopt = 0;                         // of those solves, finished by Ipopt (quadratic_program.h)
   double seconds = 0, seconds_solve = 0, seconds_sanitize = 0;
 };
 
@@ -200,8 +201,8 @@ int64_t exact_parametric_area(const ExactParametrization& param, bool* integral)
 // Report object `igm.components[i]`.
 QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, max_integer_residual, fallback_used,
                 penalty_iterations, seconds, path, penalty_integer_residual, constraints, max_constraint_violation,
-                unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, seconds_solve, seconds_sanitize,
-                flipped_before_untangle, degenerate_before_untangle, untangled_vertices, winding_defects,
-                flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
+                unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, qp_by_ipopt, seconds_solve,
+                seconds_sanitize, flipped_before_untangle, degenerate_before_untangle, untangled_vertices,
+                winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
 
 }  // namespace qgp

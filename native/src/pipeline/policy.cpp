@@ -137,6 +137,7 @@ void count_every_attempt(IgmStats& kept, const IgmStats& latest) {
   kept.penalty_violation = latest.penalty_violation;
   kept.ipopt_solves = latest.ipopt_solves;
   kept.ipopt_iterations = latest.ipopt_iterations;
+  kept.qp_by_ipopt = latest.qp_by_ipopt;
   kept.seconds_solve = latest.seconds_solve;
   kept.seconds_sanitize = latest.seconds_sanitize;
 }

@@ -139,19 +139,8 @@ std::mutex& ipopt_mutex() {
 
 }  // namespace
 
-QPResult solve_qp(const SparseQP& qp, const QPOptions& options, Progress& progress) {
-  const Eigen::Index n = qp.linear.size();
-  if (qp.hessian.rows() != n || qp.hessian.cols() != n || qp.constraints.cols() != n ||
-      qp.lower.size() != qp.constraints.rows() || qp.start.size() != n ||
-      (qp.variable_lower.size() != 0 && qp.variable_lower.size() != n))
-    throw Error(ErrorCode::Internal, "quadratic program: inconsistent sizes");
+QPResult solve_qp_ipopt(const SparseQP& qp, const QPOptions& options, Progress& progress) {
   progress.check_cancel();
-  if (n == 0) {
-    QPResult empty;
-    empty.status = QPResult::Status::Solved;
-    return empty;
-  }
-
   pin_blas_kernels();
   std::lock_guard<std::mutex> lock(ipopt_mutex());
   Ipopt::SmartPtr<QPProblem> problem = new QPProblem(qp, options, progress);

@@ -12,7 +12,7 @@
 #include "core/blas_kernels.h"
 #include "core/error.h"
 #include "core/timer.h"
-#include "seamless_map/ipopt_qp.h"
+#include "seamless_map/quadratic_program.h"
 #include "seamless_map/linear_elimination.h"
 #include "seamless_map/orientation.h"
 
@@ -1409,6 +1409,7 @@ Eigen::VectorXd ParametrizationProblem::Solver::run_ipopt(const RegionQP& rq, co
   const QPResult res = solve_qp(rq.qp, qo, progress_);
   st_.seconds_ipopt += t.seconds();
   ++st_.ipopt_solves;
+  st_.qp_by_ipopt += res.by_ipopt;
   st_.ipopt_iterations += res.iterations;
   *status = res.status;
   Eigen::VectorXd y = x;
@@ -1440,6 +1441,7 @@ ParametrizationSolution ParametrizationProblem::solve_with_relinearization(Param
   auto accumulate = [&](const ParametrizationSolveStats& s) {
     total.ipopt_solves += s.ipopt_solves;
     total.ipopt_iterations += s.ipopt_iterations;
+    total.qp_by_ipopt += s.qp_by_ipopt;
     total.repair_rounds += s.repair_rounds;
     total.field_frame_solves += s.field_frame_solves;
     total.relinearizations += s.relinearizations;

@@ -89,13 +89,14 @@ struct ParametrizationSolveStats {
   int free_variables = 0;
   int flipped_initial = 0, degenerate_initial = 0, thin_initial = 0;  // equality-only optimum
   int flipped = 0, degenerate = 0, thin = 0;                          // final map
-  int winding_defects = 0;          // see ParametrizationProblem::winding_defects (final map)
-  int forced_degenerate = 0;        // faces the hard constraints make degenerate (isolines)
-  double min_area_ratio = 0;        // min over faces of parametric / ideal area
-  double energy = 0;                // field energy of the final map (without penalty)
-  double energy_initial = 0;        // of the equality-only optimum
-  double constraint_violation = 0;  // max |Cz - b| of the caller's linear constraints
-  int ipopt_solves = 0, ipopt_iterations = 0;
+  int winding_defects = 0;                     // see ParametrizationProblem::winding_defects (final map)
+  int forced_degenerate = 0;                   // faces the hard constraints make degenerate (isolines)
+  double min_area_ratio = 0;                   // min over faces of parametric / ideal area
+  double energy = 0;                           // field energy of the final map (without penalty)
+  double energy_initial = 0;                   // of the equality-only optimum
+  double constraint_violation = 0;             // max |Cz - b| of the caller's linear constraints
+  int ipopt_solves = 0, ipopt_iterations = 0;  // quadratic programs solved (quadratic_program.h), iterations
+  int qp_by_ipopt = 0;                         // of them finished by Ipopt (the own method did not converge)
   int repair_rounds = 0, relinearizations = 0;
   std::vector<int> bad_after_round;      // bad faces of the kept pose after each repair round
   std::vector<double> seconds_of_round;  // time of each repair round

@@ -146,6 +146,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.dropped_isolines = static_cast<int>(iso.dropped.size());
   st.dropped_isoline_edges = iso.dropped;
   st.ipopt_solves = s.ipopt_solves;
+  st.qp_by_ipopt = s.qp_by_ipopt;
   st.repair_rounds = s.repair_rounds;
   st.field_frame_solves = s.field_frame_solves;
   st.max_region_faces = s.max_region_faces;

@@ -37,6 +37,7 @@ struct SeamlessMapStats {
   int dropped_isolines = 0;   // feature edges left free (see select_isolines)
   std::vector<int> dropped_isoline_edges;
   int ipopt_solves = 0;
+  int qp_by_ipopt = 0;                 // repair solves Ipopt finished (quadratic_program.h)
   int repair_rounds = 0;               // Ipopt repair rounds (0: the Cholesky optimum was regular)
   int field_frame_solves = 0;          // global solves in the field frame after a failed local repair
   int max_region_faces = 0;            // most faces constrained in one Ipopt solve
@@ -48,7 +49,7 @@ struct SeamlessMapStats {
 // Report object `seamless.components[i]`.
 QGP_JSON_FIELDS(SeamlessMapStats, flipped_triangles, degenerate_triangles, winding_defects, max_transition_residual,
                 energy, ipopt_iterations, flipped_before_ipopt, isoline_edges, dropped_isolines, repair_rounds,
-                field_frame_solves, min_area_ratio, repair_bad_faces, repair_seconds)
+                field_frame_solves, min_area_ratio, repair_bad_faces, repair_seconds, qp_by_ipopt)
 
 struct SeamlessMap {
   Parametrization param;  // rotation[] and is_cut from the cut graph
