@@ -185,7 +185,8 @@ void print_stats(const std::string& name, const SeamlessMap& m, double seconds) 
   const auto& s = m.stats;
   std::cout << "[seamless] " << name << ": flipped " << s.flipped_before_ipopt << " -> " << s.flipped_triangles
             << ", degenerate " << s.degenerate_before_ipopt << " -> " << s.degenerate_triangles << ", ipopt solves "
-            << s.ipopt_solves << " iterations " << s.ipopt_iterations << ", field-frame solves " << s.field_frame_solves
+            << s.ipopt_solves << " iterations " << s.ipopt_iterations << " rounds "
+            << ::testing::PrintToString(s.repair_bad_faces) << ", field-frame solves " << s.field_frame_solves
             << ", winding defects " << s.winding_defects << ", region faces " << s.max_region_faces << ", energy "
             << s.energy << ", min area ratio " << s.min_area_ratio << ", residual " << s.max_transition_residual << ", "
             << seconds << " s\n";
