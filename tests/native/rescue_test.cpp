@@ -175,6 +175,27 @@ TEST(RescueMeshes, TruckAtACoarseDensity) {
             << " quads\n";
 }
 
+// Truck at 2 000 quads: part 30 (genus 3, 212 triangles) keeps 7 flipped quads at the density
+// asked and 5 at half the quad edge (measured 2026-12-05). The two rungs for flipped parts chain:
+// the finer density's quads, still flipped, give way to the part's split triangles, which have none.
+TEST(RescueMeshes, AFinerDensityStillFlippedGivesWayToSplitTriangles) {
+  Session session(read_mesh_file(test::mesh_path("truck.obj")));
+  const Json report = remesh(session, 2000);
+  expect_every_part_quadded("truck@2000", session);
+  EXPECT_EQ(report["quad"]["flipped_quads"].get<int>(), 0);
+  int chained = 0;
+  for (const Json& r : report["rescued_components"]) {
+    const ComponentState& state = session.components()[r["component"].get<int>()];
+    EXPECT_EQ(state.quad_choice().untangle.flipped_after, 0) << r;
+    const std::string why = r["message"];
+    if (r["rescue"] == "split triangles" && why.find("at the density asked") != std::string::npos) {
+      EXPECT_EQ(r["edge_length_factor"], 1.0) << r;
+      ++chained;
+    }
+  }
+  EXPECT_GE(chained, 1) << "part 30 went through both rungs (measured 2026-12-05)";
+}
+
 // A torus whose tube is 1/20 of its ring, at 10 quads: the layout's quads around the tube do not
 // form a mesh (a double edge), so the only part is rescued at a finer density, and a density asked
 // again gives the same quads.

@@ -425,7 +425,9 @@ void Session::rescue_flipped_components(Progress& progress) {
   }
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
-    if (state.failure || state.quads->untangle.flipped_after == 0 || state.mesh.num_faces() > kFlipRescueMaxTriangles)
+    // Also a part that the finer density left with fewer flipped quads, but some.
+    if (!state.quadded() || state.split_quads || state.quads->untangle.flipped_after == 0 ||
+        state.mesh.num_faces() > kFlipRescueMaxTriangles)
       continue;
     const double target = targets[c];
     if (std::min(3.0 * std::ceil(target / 3), 3.0 * state.mesh.num_faces()) > budget) continue;  // too large
@@ -439,9 +441,11 @@ void Session::rescue_flipped_components(Progress& progress) {
     const int quads = split->extraction.quads.num_quads();
     if (split->untangle.flipped_after > 0 || quads > budget) continue;
     budget -= quads;
-    state.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
-                                std::to_string(state.quads->untangle.flipped_after) +
-                                    " quad(s) stay flipped against the surface (it folds within them)"};
+    if (!state.failure)
+      state.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                  std::to_string(state.quads->untangle.flipped_after) +
+                                      " quad(s) stay flipped against the surface (it folds within them)"};
+    state.finer_edge_factor = 1;  // the split triangles replace the finer density's quads
     state.split_quads = std::move(split);
   }
   Json& rescue_seconds = report_["timings_s"]["rescue"];
