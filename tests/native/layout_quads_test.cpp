@@ -42,6 +42,9 @@ int allowed_flips_after_untangle(const std::string& name, double target, int qua
   if (name == "dragon-genus1.obj") return quads / 100;
   if (name == "beetle.off" && target < 1000) return 2;
   if (name == "armadillo.obj" && target < 1000) return 2;
+  // 1 since the repair's own interior-point solver (2026-12-05); the remesh takes these quads and, after
+  // its untangle on the input surface, has none flipped.
+  if (name == "armadillo.obj" && target == 2000) return 1;
   if (name == "mnf07HeadFem_rem_rem_p.obj" && target < 1000) return 6;
   if ((name == "nefertiti.obj" || name == "stanford-bunny.obj") && target < 1000) return 1;
   return 0;
