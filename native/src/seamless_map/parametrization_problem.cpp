@@ -12,9 +12,9 @@
 #include "core/blas_kernels.h"
 #include "core/error.h"
 #include "core/timer.h"
-#include "seamless_map/quadratic_program.h"
 #include "seamless_map/linear_elimination.h"
 #include "seamless_map/orientation.h"
+#include "seamless_map/quadratic_program.h"
 
 namespace qgp {
 
