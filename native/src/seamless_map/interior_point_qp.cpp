@@ -253,7 +253,7 @@ class InteriorPoint {
   // A step of length a scales the dual residual by 1 - a (it is linear in the step); a larger one
   // means the normal equations were solved inaccurately, and the iterate cannot be trusted.
   bool lost_accuracy(double expected_rd) const {
-    return max_abs(rd_) > kResidualGrowth * expected_rd + kResidualFloor * dual_scale_;
+    return max_abs(rd_) > kResidualGrowth * expected_rd + std::max(kResidualFloor, tolerance_) * dual_scale_;
   }
 
   bool multipliers_diverge() const { return max_abs(z_) > kDivergedMultipliers * dual_scale_; }
