@@ -23,7 +23,8 @@ constexpr double kAcceptableFactor = 100;   // Acceptable: within this factor of
 constexpr double kDivergedMultipliers = 1e12;
 constexpr int kMaxRefinements = 4;       // iterative refinement steps per Newton solve, at most
 constexpr double kResidualGrowth = 10;   // lost accuracy: the dual residual this much above
-constexpr double kResidualFloor = 1e-8;  // its expected value plus this share of its scale
+constexpr double kResidualFloor = 1e-8;  // its expected value plus this share of its scale (or the
+                                         // tolerance's: a residual within it does no harm)
 constexpr double kFirstShift = 1e-12;    // diagonal shift of the normal matrix, relative to H's diagonal
 
 // The constraints C x >= d in compressed rows: the program's rows, then one per bounded variable.
