@@ -27,44 +27,32 @@ constexpr double kResidualFloor = 1e-8;  // its expected value plus this share o
                                          // tolerance's: a residual within it does no harm)
 constexpr double kFirstShift = 1e-12;    // diagonal shift of the normal matrix, relative to H's diagonal
 
-// The constraints C x >= d in compressed rows: the program's rows, then one per bounded variable.
-struct Rows {
-  std::vector<int> start{0};
-  std::vector<int> col;
-  std::vector<double> coeff;
-  std::vector<double> rhs;
-  int size() const { return static_cast<int>(rhs.size()); }
-  void add(int c, double a) { col.push_back(c), coeff.push_back(a); }
-  void end_row(double d) { start.push_back(static_cast<int>(col.size())), rhs.push_back(d); }
+// The constraints C x >= d: the program's rows, then one per bounded variable.
+struct Constraints {
+  SpMat c, ct;  // C (m x n) and its transpose
+  Vec d;
 };
 
-Rows constraint_rows(const SparseQP& qp) {
-  Rows rows;
+Constraints constraint_rows(const SparseQP& qp) {
+  const int n = static_cast<int>(qp.linear.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<double> rhs;
   for (int r = 0; r < qp.constraints.rows(); ++r) {
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(qp.constraints, r); it; ++it)
-      if (it.value() != 0) rows.add(static_cast<int>(it.col()), it.value());
-    rows.end_row(qp.lower[r]);
+      if (it.value() != 0) entries.emplace_back(r, static_cast<int>(it.col()), it.value());
+    rhs.push_back(qp.lower[r]);
   }
   for (int j = 0; j < qp.variable_lower.size(); ++j)
-    if (qp.variable_lower[j] > kNoBound) rows.add(j, 1.0), rows.end_row(qp.variable_lower[j]);
-  return rows;
-}
-
-Vec times(const Rows& c, const Vec& x) {  // C x
-  Vec y(c.size());
-  for (int r = 0; r < c.size(); ++r) {
-    double v = 0;
-    for (int k = c.start[r]; k < c.start[r + 1]; ++k) v += c.coeff[k] * x[c.col[k]];
-    y[r] = v;
-  }
-  return y;
-}
-
-Vec times_transposed(const Rows& c, const Vec& y, int n) {  // C^T y
-  Vec x = Vec::Zero(n);
-  for (int r = 0; r < c.size(); ++r)
-    for (int k = c.start[r]; k < c.start[r + 1]; ++k) x[c.col[k]] += c.coeff[k] * y[r];
-  return x;
+    if (qp.variable_lower[j] > kNoBound) {
+      entries.emplace_back(static_cast<int>(rhs.size()), j, 1.0);
+      rhs.push_back(qp.variable_lower[j]);
+    }
+  Constraints cs;
+  cs.c.resize(static_cast<Eigen::Index>(rhs.size()), n);
+  cs.c.setFromTriplets(entries.begin(), entries.end());
+  cs.ct = cs.c.transpose();
+  cs.d = Eigen::Map<const Vec>(rhs.data(), static_cast<Eigen::Index>(rhs.size()));
+  return cs;
 }
 
 // K = H + C^T diag(w) C, lower triangle. Its pattern depends on those of H and C only (w > 0),
@@ -73,28 +61,22 @@ Vec times_transposed(const Rows& c, const Vec& y, int n) {  // C^T y
 // 623: 110 M products, 2.3 M entries), so nothing is stored per product.
 class NormalMatrix {
  public:
-  NormalMatrix(const SpMat& hessian, const Rows& rows) {
-    const int n = static_cast<int>(hessian.rows());
-    std::vector<Eigen::Triplet<double>> entries;
-    for (int r = 0; r < rows.size(); ++r)
-      for (int k = rows.start[r]; k < rows.start[r + 1]; ++k) entries.emplace_back(r, rows.col[k], rows.coeff[k]);
-    c_.resize(rows.size(), n);
-    c_.setFromTriplets(entries.begin(), entries.end());
-    ct_ = c_.transpose();
+  NormalMatrix(const SpMat& hessian, const Constraints& cs) : cs_(cs) {
+    const Eigen::Index n = hessian.rows();
     SpMat diagonal(n, n);  // explicit, so that the shift has entries to go to
     diagonal.setIdentity();
     hessian_lower_ = SpMat(hessian.triangularView<Eigen::Lower>()) + 0.0 * diagonal;
   }
 
   const SpMat& assemble(const Vec& w) {
-    const SpMat weighted = ct_ * w.asDiagonal();
-    const SpMat product = weighted * c_;
+    const SpMat weighted = cs_.ct * w.asDiagonal();
+    const SpMat product = weighted * cs_.c;
     k_ = hessian_lower_ + SpMat(product.triangularView<Eigen::Lower>());
     return k_;
   }
 
  private:
-  SpMat c_, ct_;  // C (m x n) and its transpose
+  const Constraints& cs_;
   SpMat hessian_lower_;
   SpMat k_;
 };
@@ -120,16 +102,14 @@ class InteriorPoint {
         options_(options),
         progress_(progress),
         n_(static_cast<int>(qp.linear.size())),
-        rows_(constraint_rows(qp)),
-        m_(rows_.size()),
-        normal_(qp.hessian, rows_) {
+        cs_(constraint_rows(qp)),
+        m_(static_cast<int>(cs_.d.size())),
+        normal_(qp.hessian, cs_) {
     cholesky_.cholmod().print = 0;
     cholesky_.cholmod().nmethods = 1;
     cholesky_.cholmod().method[0].ordering = CHOLMOD_AMD;  // deterministic
-    d_ = Eigen::Map<const Vec>(rows_.rhs.data(), m_);
     tolerance_ = kTighterThanIpopt * options.tolerance;
-    hessian_scale_ = 1.0;
-    for (int j = 0; j < n_; ++j) hessian_scale_ = std::max(hessian_scale_, std::abs(qp.hessian.coeff(j, j)));
+    hessian_scale_ = std::max(1.0, max_abs(qp.hessian.diagonal()));
   }
 
   QPResult run() {
@@ -162,7 +142,7 @@ class InteriorPoint {
   // The start: x as given, s its constraint values (at least a small floor), z = 1; then one
   // affine step, and s and z moved to at least the floors (Nocedal & Wright (16.60), scaled).
   bool start_point() {
-    const Vec w = times(rows_, x_) - d_;
+    const Vec w = times(x_) - cs_.d;
     const double floor = 1e-3 * std::max(1.0, max_abs(w));
     s_ = w.cwiseMax(floor);
     z_ = Vec::Constant(m_, 1.0);
@@ -199,29 +179,33 @@ class InteriorPoint {
   Direction newton(const Vec& rc) const {
     Direction d;
     const Vec t = (rc + z_.cwiseProduct(rp_)).cwiseQuotient(s_);
-    const Vec rhs = -rd_ - times_transposed(rows_, t, n_);
+    const Vec rhs = -rd_ - times_transposed(t);
     d.dx = cholesky_.solve(rhs);
     // Iterative refinement against K without the shift, while it halves the residual.
-    double residual = (rhs - normal_times(d.dx)).lpNorm<Eigen::Infinity>();
-    for (int k = 0; k < kMaxRefinements && residual > 1e-15 * max_abs(rhs); ++k) {
-      const Vec next = d.dx + cholesky_.solve(rhs - normal_times(d.dx));
-      const double next_residual = (rhs - normal_times(next)).lpNorm<Eigen::Infinity>();
-      if (!(next_residual < residual)) break;
+    Vec residual = rhs - normal_times(d.dx);
+    for (int k = 0; k < kMaxRefinements && max_abs(residual) > 1e-15 * max_abs(rhs); ++k) {
+      const Vec next = d.dx + cholesky_.solve(residual);
+      Vec next_residual = rhs - normal_times(next);
+      if (!(max_abs(next_residual) < max_abs(residual))) break;
       d.dx = next;
-      if (next_residual > 0.5 * residual) break;
-      residual = next_residual;
+      if (max_abs(next_residual) > 0.5 * max_abs(residual)) break;
+      residual = std::move(next_residual);
     }
-    d.ds = times(rows_, d.dx) + rp_;
+    d.ds = times(d.dx) + rp_;
     d.dz = -(rc + z_.cwiseProduct(d.ds)).cwiseQuotient(s_);
     return d;
   }
 
-  Vec normal_times(const Vec& v) const {  // (H + C^T (Z/S) C) v
-    return qp_.hessian * v + times_transposed(rows_, z_.cwiseQuotient(s_).cwiseProduct(times(rows_, v)), n_);
+  Vec times(const Vec& x) const { return cs_.c * x; }              // C x
+  Vec times_transposed(const Vec& y) const { return cs_.ct * y; }  // C^T y
+
+  Vec normal_times(const Vec& v) const {  // (H + C^T W C) v, W = Z/S of the last factorization
+    return qp_.hessian * v + times_transposed(w_.cwiseProduct(times(v)));
   }
 
   bool factor() {
-    const SpMat& k = normal_.assemble(z_.cwiseQuotient(s_));
+    w_ = z_.cwiseQuotient(s_);
+    const SpMat& k = normal_.assemble(w_);
     if (!analysed_) {
       cholesky_.analyzePattern(k);
       analysed_ = true;
@@ -236,11 +220,11 @@ class InteriorPoint {
   }
 
   void update_residuals() {
-    const Vec cx = times(rows_, x_);
+    const Vec cx = times(x_);
     hx_ = qp_.hessian * x_;
-    rp_ = cx - s_ - d_;
-    rd_ = hx_ + qp_.linear - times_transposed(rows_, z_, n_);
-    primal_scale_ = 1 + std::max(max_abs(d_), max_abs(cx));
+    rp_ = cx - s_ - cs_.d;
+    rd_ = hx_ + qp_.linear - times_transposed(z_);
+    primal_scale_ = 1 + std::max(max_abs(cs_.d), max_abs(cx));
     dual_scale_ = 1 + std::max(max_abs(qp_.linear), max_abs(hx_));
   }
 
@@ -274,12 +258,12 @@ class InteriorPoint {
   const QPOptions& options_;
   Progress& progress_;
   const int n_;
-  const Rows rows_;
+  const Constraints cs_;
   const int m_;
   NormalMatrix normal_;
   Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky_;
   bool analysed_ = false;
-  Vec d_, x_, s_, z_, hx_, rp_, rd_;
+  Vec x_, s_, z_, w_, hx_, rp_, rd_;  // w = z / s at the last factorization
   double tolerance_ = 0;
   double hessian_scale_ = 1, primal_scale_ = 1, dual_scale_ = 1;
 };
