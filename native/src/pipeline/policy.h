@@ -206,9 +206,9 @@ bool finer_density_may_help(const std::string& failed_stage);
 constexpr double kFinerFlipShare = 0.25;
 // A part whose chosen quads stay flipped against the surface (it folds within a quad: thin sheets,
 // small parts), also those of the finer density above (truck's part 30 at 2 000 quads: 7 flipped,
-// 5 at half the edge length), takes its split triangles instead when they have no flipped quad and all such
-// splits' quads, in component order, stay within this share of the quads made: small parts only
-// (a large part keeps its regular quads, its flips reported).
+// 5 at half the edge length), takes its split triangles instead when they have no flipped quad and
+// all such splits' quads, in component order, stay within this share of the quads made: small
+// parts only (a large part keeps its regular quads, its flips reported).
 constexpr double kFlipRescueShare = 0.1;
 // ...and only parts of at most this many triangles are tried (each try decimates and untangles the
 // part: on cycloidal's 117 parts, trying every flipped one cost 132 s of a 556 s run).
