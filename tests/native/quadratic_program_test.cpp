@@ -126,7 +126,6 @@ TEST(InteriorPointQP, ALinearProgramInABoxReachesItsCorner) {
 
 TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
   std::mt19937 rng(7);
-  int solved = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const int cells = 10 + 37 * (trial % 8);
     const double scale = trial % 3 == 0 ? 1e-3 : (trial % 3 == 1 ? 1.0 : 1e3);
@@ -140,14 +139,12 @@ TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
                  std::to_string(scale));
     ASSERT_TRUE(converged(ipopt)) << ipopt.message;
     ASSERT_TRUE(converged(own)) << own.message;
-    ++solved;
     const double f_own = objective(qp, own.x), f_ipopt = objective(qp, ipopt.x);
     const double size = 1 + std::abs(f_ipopt);
     EXPECT_LT(std::abs(f_own - f_ipopt) / size, 1e-5);
     EXPECT_LE(violation(qp, own.x), 1e-9 * scale);
     EXPECT_LT(own.iterations, 60);
   }
-  EXPECT_EQ(solved, 40);
 }
 
 TEST(InteriorPointQP, SameProgramSameBits) {
