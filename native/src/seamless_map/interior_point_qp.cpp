@@ -55,30 +55,128 @@ Constraints constraint_rows(const SparseQP& qp) {
   return cs;
 }
 
-// K = H + C^T diag(w) C, lower triangle. Its pattern depends on those of H and C only (w > 0),
-// so one symbolic analysis serves every iteration. Formed by sparse products: a row with k entries
-// adds k^2 products but few entries (a row of the integer-grid map's repair on dragon-genus1 has
-// 623: 110 M products, 2.3 M entries), so nothing is stored per product.
-class NormalMatrix {
+// The variables the normal equations eliminate by their own pivot: those with no Hessian entry
+// off the diagonal that share exactly one row of C with other variables, and no other such
+// variable in it (the slacks of elastic rows: the field-frame solve of mnf07 has 131 000 of them
+// beside 24 000 map coordinates). Every other variable is kept.
+struct Singletons {
+  std::vector<int> kept_of;  // variable -> index among the kept ones, or -1: eliminated
+  int kept = 0;
+  std::vector<int> var, row;  // each eliminated variable and the row it shares
+  std::vector<double> coeff;  // C(row, var)
+};
+
+bool couples_in_hessian(const SpMat& hessian, int j) {
+  for (SpMat::InnerIterator it(hessian, j); it; ++it)
+    if (it.row() != j && it.value() != 0) return true;
+  return false;
+}
+
+Singletons find_singletons(const SpMat& hessian, const Constraints& cs) {
+  const int n = static_cast<int>(cs.c.cols());
+  std::vector<int> row_length(cs.c.rows(), 0);
+  for (int j = 0; j < n; ++j)
+    for (SpMat::InnerIterator it(cs.c, j); it; ++it) ++row_length[it.row()];
+  Singletons sg;
+  sg.kept_of.assign(n, -1);
+  std::vector<char> row_taken(cs.c.rows(), 0);
+  for (int j = 0; j < n; ++j) {
+    int shared = -1, count = 0;
+    double coeff = 0;
+    for (SpMat::InnerIterator it(cs.c, j); it; ++it)
+      if (row_length[it.row()] > 1) shared = static_cast<int>(it.row()), coeff = it.value(), ++count;
+    if (count == 1 && !row_taken[shared] && !couples_in_hessian(hessian, j)) {
+      row_taken[shared] = 1;
+      sg.var.push_back(j), sg.row.push_back(shared), sg.coeff.push_back(coeff);
+    } else {
+      sg.kept_of[j] = sg.kept++;
+    }
+  }
+  return sg;
+}
+
+// Columns of `m` (whose rows are variables) of the kept variables, renumbered.
+SpMat kept_columns(const SpMat& m, const Singletons& sg) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int j = 0; j < m.cols(); ++j)
+    if (sg.kept_of[j] >= 0)
+      for (SpMat::InnerIterator it(m, j); it; ++it) entries.emplace_back(it.row(), sg.kept_of[j], it.value());
+  SpMat kept(m.rows(), sg.kept);
+  kept.setFromTriplets(entries.begin(), entries.end());
+  return kept;
+}
+
+// The normal equations K dx = b, K = H + C^T diag(w) C. Each eliminated variable j, sharing row r,
+// has the pivot p_j = q_j + w_r C_rj^2, q_j = H_jj + sum over its other rows i of w_i C_ij^2; K on
+// the kept variables u is then
+//     K_u = H_uu + C_u^T diag(w~) C_u,  w~_r = w_r - (w_r C_rj)^2 / p_j = w_r q_j / p_j
+// (w~ = w on other rows; the last form has no cancellation where w_r dwarfs q_j). Its pattern
+// depends on those of H and C only (w > 0): one symbolic analysis serves every iteration. Formed
+// by sparse products: a row with k entries adds k^2 products but few entries (a row of the
+// integer-grid map's repair on dragon-genus1 has 623: 110 M products, 2.3 M entries), so nothing
+// is stored per product.
+class NormalEquations {
  public:
-  NormalMatrix(const SpMat& hessian, const Constraints& cs) : cs_(cs) {
-    const Eigen::Index n = hessian.rows();
-    SpMat diagonal(n, n);  // explicit, so that the shift has entries to go to
+  NormalEquations(const SpMat& hessian, const Constraints& cs)
+      : cs_(cs),
+        sg_(find_singletons(hessian, cs)),
+        hessian_diagonal_(hessian.diagonal()),
+        pivot_(Vec::Zero(hessian.rows())) {
+    const SpMat h_kept = kept_columns(SpMat(kept_columns(hessian, sg_).transpose()), sg_);
+    SpMat diagonal(sg_.kept, sg_.kept);  // explicit, so that the shift has entries to go to
     diagonal.setIdentity();
-    hessian_lower_ = SpMat(hessian.triangularView<Eigen::Lower>()) + 0.0 * diagonal;
+    hessian_lower_ = SpMat(h_kept.triangularView<Eigen::Lower>()) + 0.0 * diagonal;
+    c_kept_ = kept_columns(cs.c, sg_);
+    ct_kept_ = c_kept_.transpose();
   }
 
+  // K_u for the weights w, lower triangle.
   const SpMat& assemble(const Vec& w) {
-    const SpMat weighted = cs_.ct * w.asDiagonal();
-    const SpMat product = weighted * cs_.c;
+    w_ = w;
+    Vec reduced_w = w;
+    for (size_t k = 0; k < sg_.var.size(); ++k) {
+      const int j = sg_.var[k], r = sg_.row[k];
+      double own = hessian_diagonal_[j];  // q_j
+      for (SpMat::InnerIterator it(cs_.c, j); it; ++it)
+        if (it.row() != r) own += w[it.row()] * it.value() * it.value();
+      pivot_[j] = own + w[r] * sg_.coeff[k] * sg_.coeff[k];
+      reduced_w[r] = w[r] * own / pivot_[j];
+    }
+    const SpMat weighted = ct_kept_ * reduced_w.asDiagonal();
+    const SpMat product = weighted * c_kept_;
     k_ = hessian_lower_ + SpMat(product.triangularView<Eigen::Lower>());
     return k_;
   }
 
+  // dx with K dx = b, given the factorization of the last assembled K_u.
+  template <class Factor>
+  Vec solve(const Factor& factor, const Vec& b) const {
+    Vec g = Vec::Zero(cs_.c.rows());
+    Vec reduced_b(sg_.kept);
+    for (int j = 0; j < static_cast<int>(b.size()); ++j)
+      if (sg_.kept_of[j] >= 0) reduced_b[sg_.kept_of[j]] = b[j];
+    for (size_t k = 0; k < sg_.var.size(); ++k)
+      g[sg_.row[k]] = w_[sg_.row[k]] * sg_.coeff[k] * b[sg_.var[k]] / pivot_[sg_.var[k]];
+    reduced_b -= ct_kept_ * g;
+    const Vec dx_kept = factor.solve(reduced_b);
+    const Vec c_dx = c_kept_ * dx_kept;
+    Vec dx(b.size());
+    for (int j = 0; j < static_cast<int>(b.size()); ++j)
+      if (sg_.kept_of[j] >= 0) dx[j] = dx_kept[sg_.kept_of[j]];
+    for (size_t k = 0; k < sg_.var.size(); ++k) {
+      const int j = sg_.var[k], r = sg_.row[k];
+      dx[j] = (b[j] - w_[r] * sg_.coeff[k] * c_dx[r]) / pivot_[j];
+    }
+    return dx;
+  }
+
  private:
   const Constraints& cs_;
-  SpMat hessian_lower_;
+  const Singletons sg_;
+  const Vec hessian_diagonal_;
+  SpMat hessian_lower_, c_kept_, ct_kept_;
   SpMat k_;
+  Vec w_, pivot_;  // the weights and pivots of the last assembly
 };
 
 double max_abs(const Vec& v) { return v.size() ? v.lpNorm<Eigen::Infinity>() : 0.0; }
@@ -180,11 +278,11 @@ class InteriorPoint {
     Direction d;
     const Vec t = (rc + z_.cwiseProduct(rp_)).cwiseQuotient(s_);
     const Vec rhs = -rd_ - times_transposed(t);
-    d.dx = cholesky_.solve(rhs);
+    d.dx = normal_.solve(cholesky_, rhs);
     // Iterative refinement against K without the shift, while it halves the residual.
     Vec residual = rhs - normal_times(d.dx);
     for (int k = 0; k < kMaxRefinements && max_abs(residual) > 1e-15 * max_abs(rhs); ++k) {
-      const Vec next = d.dx + cholesky_.solve(residual);
+      const Vec next = d.dx + normal_.solve(cholesky_, residual);
       Vec next_residual = rhs - normal_times(next);
       if (!(max_abs(next_residual) < max_abs(residual))) break;
       d.dx = next;
@@ -260,7 +358,7 @@ class InteriorPoint {
   const int n_;
   const Constraints cs_;
   const int m_;
-  NormalMatrix normal_;
+  NormalEquations normal_;
   Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky_;
   bool analysed_ = false;
   Vec x_, s_, z_, w_, hx_, rp_, rd_;  // w = z / s at the last factorization
