@@ -109,11 +109,7 @@ void expect_invariants(const std::string& name, const Session& session, size_t c
   // Known defect: wingnut's cell map at 100 quads (features at 40 degrees) keeps one flipped
   // triangle, since the quantization moves its scale toward the count asked (2026-11-27); at 400
   // quads too (2026-12-01, when the sweep's 500 became 400).
-  // camelhead's at 100 quads keeps 2 since the repair's own interior-point solver (2026-12-05): its
-  // seamless map, and so its T-mesh, moved in the last digits, and one cell's embedding folds.
-  const int known_flipped = name == "wingnut.obj" && walls && target <= 400 ? 1
-                            : name == "camelhead.off" && target == 100      ? 2
-                                                                            : 0;
+  const int known_flipped = name == "wingnut.obj" && walls && target <= 400 ? 1 : 0;
   const CellMapStats cells = test::expect_cell_map_invariants(where, state.mesh, tm, q, cell_options, known_flipped);
   std::cout << name << " | " << c << " | " << state.field->num_singularities << " | " << tm.nodes.size() << " | "
             << tm.edges.size() << " | " << tm.cells.size() << " | " << tm.stats.trace_seconds << " | " << target
