@@ -26,6 +26,10 @@ constexpr double kResidualGrowth = 10;   // lost accuracy: the dual residual thi
 constexpr double kResidualFloor = 1e-8;  // its expected value plus this share of its scale (or the
                                          // tolerance's: a residual within it does no harm)
 constexpr double kFirstShift = 1e-12;    // diagonal shift of the normal matrix, relative to H's diagonal
+// Normal matrices of at least this many variables are ordered by nested dissection (METIS), smaller
+// ones by minimum degree (AMD), whose analysis is cheaper. Both are deterministic. The local repair
+// rounds of mnf07 (20 466 variables) need 54 instead of 96 Mflop per factorization.
+constexpr int kNestedDissectionVariables = 10000;
 
 // The constraints C x >= d: the program's rows, then one per bounded variable.
 struct Constraints {
@@ -130,6 +134,8 @@ class NormalEquations {
     ct_kept_ = c_kept_.transpose();
   }
 
+  int kept_variables() const { return sg_.kept; }
+
   // K_u for the weights w, lower triangle.
   const SpMat& assemble(const Vec& w) {
     w_ = w;
@@ -205,7 +211,8 @@ class InteriorPoint {
         normal_(qp.hessian, cs_) {
     cholesky_.cholmod().print = 0;
     cholesky_.cholmod().nmethods = 1;
-    cholesky_.cholmod().method[0].ordering = CHOLMOD_AMD;  // deterministic
+    cholesky_.cholmod().method[0].ordering =
+        normal_.kept_variables() >= kNestedDissectionVariables ? CHOLMOD_METIS : CHOLMOD_AMD;
     tolerance_ = kTighterThanIpopt * options.tolerance;
     hessian_scale_ = std::max(1.0, max_abs(qp.hessian.diagonal()));
   }
