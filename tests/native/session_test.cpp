@@ -278,6 +278,23 @@ TEST(SessionPipeline, NewDensityOnlyRequantizes) {
   EXPECT_LT(ratio, 5.3);
 }
 
+// A quantization that makes triangles degenerate in every integer-grid map of its values
+// (stanford-bunny at 1 000 quads: 3, where a T-edge of length 0 collapses a sliver) leaves the map
+// unrepaired in a quad job: no repair could make it regular. The quads come from the T-mesh layout.
+TEST(SessionPipeline, AQuadJobDoesNotRepairAMapThatCannotBeRegular) {
+  Session session(read_mesh_file(test::mesh_path("stanford-bunny.obj")));
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 1000));
+  const Json& report = session.report();
+  ASSERT_EQ(report["igm"]["components"].size(), 1u);
+  const Json& igm = report["igm"]["components"][0];
+  EXPECT_GT(igm["forced_degenerate"].get<int>(), 0);
+  EXPECT_GE(igm["degenerate_triangles"].get<int>(), igm["forced_degenerate"].get<int>());
+  EXPECT_TRUE(igm["repair_bad_faces"].empty());
+  EXPECT_NE(igm["path"].get<std::string>().find("not repaired"), std::string::npos) << igm["path"];
+  EXPECT_EQ(report["extraction"]["layout_components"], 1);
+  expect_valid_output("stanford-bunny.obj", session, -1);
+}
+
 // A density whose edge length is more than kMaxSeamlessRescale times the seamless map's solves the
 // map again, and the cross field too (its close singularity pairs depend on the edge length,
 // policy.h kCancelPairsWithin): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at

@@ -455,6 +455,7 @@ IntegerGridMapSolver::IntegerGridMapSolver(const TriMesh& mesh, const CrossField
   solve_options_.count_stagnation_rounds = options.count_stagnation_rounds;
   solve_options_.halving_rounds = options.halving_rounds;
   solve_options_.relinearization_rounds = options.relinearization_rounds;
+  solve_options_.skip_repair_if_forced = options.skip_repair_if_forced;
 }
 
 IntegerGridMapSolver::~IntegerGridMapSolver() = default;
@@ -546,6 +547,7 @@ ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized
   ParametrizationSolution solution = problem_.solve(solve_options_, progress_);
   count_solves(solution);
   stats_.flipped_initial = solution.stats.flipped_initial;
+  stats_.forced_degenerate = solution.stats.forced_degenerate;
   stats_.faces = mesh_.num_faces();
   stats_.repair_bad_faces = solution.stats.bad_after_round;
   stats_.repair_seconds = solution.stats.seconds_of_round;

@@ -44,6 +44,8 @@ struct IgmOptions {
   int halving_rounds = 0;           // see ParametrizationSolveOptions
   int relinearization_rounds = 1;   // extra re-linearizations inside each solve once regular
   int fraction_bits = 20;           // of the exact result
+  // No repair where the integer values make triangles degenerate (see ParametrizationSolveOptions).
+  bool skip_repair_if_forced = false;
 };
 
 // What one solve of the integer-grid map does (paper §7.1).
@@ -84,6 +86,7 @@ struct IgmStats {
   double penalty_integer_residual = 0;       // the same after the penalty phase (<= 1e-4 expected)
   double max_constraint_violation = 0;       // ‖Cz − b‖∞ of the T-edge rows in the final continuous map
   int flipped_initial = 0;                   // flipped triangles of the hard solve's equality-only optimum
+  int forced_degenerate = 0;                 // triangles the integer values make degenerate in every map
   int faces = 0;                             // triangles of the component
   std::vector<int> repair_bad_faces;         // the hard solve's bad faces after each repair round
   std::vector<double> repair_seconds;        // and the time of each round
@@ -199,10 +202,10 @@ int count_exact_winding_defects(const TriMesh& mesh, const ExactParametrization&
 int64_t exact_parametric_area(const ExactParametrization& param, bool* integral);
 
 // Report object `igm.components[i]`.
-QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, max_integer_residual, fallback_used,
-                penalty_iterations, seconds, path, penalty_integer_residual, constraints, max_constraint_violation,
-                unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations, qp_by_ipopt, seconds_solve,
-                seconds_sanitize, flipped_before_untangle, degenerate_before_untangle, untangled_vertices,
-                winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
+QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, forced_degenerate, max_integer_residual,
+                fallback_used, penalty_iterations, seconds, path, penalty_integer_residual, constraints,
+                max_constraint_violation, unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations,
+                qp_by_ipopt, seconds_solve, seconds_sanitize, flipped_before_untangle, degenerate_before_untangle,
+                untangled_vertices, winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
 
 }  // namespace qgp

@@ -492,6 +492,7 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   if (!escalate) {
     options.max_repair_rounds = kRepairRoundsWithoutEscalation;
     options.halving_rounds = kHalvingRoundsWithoutEscalation;
+    options.skip_repair_if_forced = true;
   }
   IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
                               state.traced->tmesh, state.quantization->result, options, progress);
@@ -503,6 +504,11 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   ladder.finish();
   map.stats.seconds = timer.seconds();
   progress.update(1.0);
+  if (!escalate && map.stats.forced_degenerate > 0) {
+    map.stats.path = "global, not repaired (" + std::to_string(map.stats.forced_degenerate) +
+                     " triangles degenerate in every map of these integer values)";
+    return IgmResult{std::move(map.param), std::move(map.stats), escalate};
+  }
   untangle_remaining(state, map, progress);
   return IgmResult{std::move(map.param), std::move(map.stats), escalate};
 }

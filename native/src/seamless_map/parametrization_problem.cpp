@@ -935,6 +935,7 @@ std::vector<int> ParametrizationProblem::Solver::region_parts(const std::vector<
 }
 
 bool ParametrizationProblem::Solver::needs_repair(const Census& initial) const {
+  if (options_.skip_repair_if_forced && initial.forced > 0) return false;
   return options_.regularity != RegularityMode::Off &&
          (options_.regularity == RegularityMode::AllFaces || initial.bad() > 0);
 }

@@ -78,6 +78,9 @@ struct ParametrizationSolveOptions {
                                                // solve in the field's frame, then max_repair_rounds / 2 more rounds
   bool field_frame_solve = true;               // with winding_repair: the global solve above (false: the
                                                // local repair only, for callers with a fallback)
+  bool skip_repair_if_forced = false;          // no repair where the hard constraints make faces
+                                               // degenerate: no map can be regular then (for callers
+                                               // that use a regular map or none)
   int relinearization_rounds = 3;              // at most this many re-linearizations once regular
   double relinearization_tolerance = 1e-3;     // stop when the energy drops by less (relative)
   int max_ipopt_iterations = 300;
