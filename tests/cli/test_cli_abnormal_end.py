@@ -19,12 +19,14 @@ def main():
     ap.add_argument("--exit-preload", required=True, help="shared library calling exit(0) after a delay")
     args = ap.parse_args()
     failures = []
+    # A long run (about 20 s on 2 cores), so that the signal lands inside the pipeline.
+    run = [os.path.join(args.meshes, "mnf07HeadFem_rem_rem_p.obj"), "--faces", "2000", "--sharp-angle", "60"]
     with tempfile.TemporaryDirectory() as tmp:
         for sig, words in ((signal.SIGSEGV, "crashed (SIGSEGV)"), (signal.SIGABRT, "aborted (SIGABRT)")):
             out = os.path.join(tmp, f"out_{sig.name}.obj")
-            proc = subprocess.Popen([args.qgp, "remesh", os.path.join(args.meshes, "stanford-bunny.obj"), "-o", out,
-                                     "--faces", "2000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            time.sleep(1.5)  # inside the pipeline: the run takes tens of seconds
+            proc = subprocess.Popen([args.qgp, "remesh", *run, "-o", out], stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, text=True)
+            time.sleep(1.5)
             running = proc.poll() is None
             proc.send_signal(sig)
             _, err = proc.communicate(timeout=60)
@@ -39,8 +41,8 @@ def main():
                 failures.append(f"{sig.name}: {out} was written")
         out = os.path.join(tmp, "out_exit.obj")
         env = dict(os.environ, LD_PRELOAD=os.path.abspath(args.exit_preload), QGP_TEST_EXIT_AFTER_MS="1500")
-        proc = subprocess.run([args.qgp, "remesh", os.path.join(args.meshes, "stanford-bunny.obj"), "-o", out,
-                               "--faces", "2000"], capture_output=True, text=True, env=env, timeout=120)
+        proc = subprocess.run([args.qgp, "remesh", *run, "-o", out], capture_output=True, text=True, env=env,
+                              timeout=120)
         print(f"exit(0) from a library: exit {proc.returncode}, stderr: {proc.stderr.strip()[-100:]}")
         if proc.returncode != 4:
             failures.append(f"exit(0) from a library: exit status {proc.returncode}, expected 4")
