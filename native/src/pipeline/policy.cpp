@@ -482,6 +482,17 @@ void escalate_while_irregular(const ComponentState& state, AttemptLadder& ladder
   }
 }
 
+// Why a quad job's integer-grid map is left as solved, without the untangle ("": untangle it).
+std::string why_quad_job_leaves_map_as_solved(const IgmStats& s) {
+  if (s.forced_degenerate > 0)
+    return "global, not repaired (" + std::to_string(s.forced_degenerate) +
+           " triangles degenerate in every map of these integer values)";
+  const int left = s.flipped_triangles + s.degenerate_triangles;
+  if (left > kMaxShareToUntangle * s.faces)
+    return "global, not untangled (" + std::to_string(left) + " flipped or degenerate triangles)";
+  return "";
+}
+
 }  // namespace
 
 IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Progress& progress) {
@@ -504,12 +515,11 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
   ladder.finish();
   map.stats.seconds = timer.seconds();
   progress.update(1.0);
-  if (!escalate && map.stats.forced_degenerate > 0) {
-    map.stats.path = "global, not repaired (" + std::to_string(map.stats.forced_degenerate) +
-                     " triangles degenerate in every map of these integer values)";
-    return IgmResult{std::move(map.param), std::move(map.stats), escalate};
-  }
-  untangle_remaining(state, map, progress);
+  const std::string left_as_solved = escalate ? "" : why_quad_job_leaves_map_as_solved(map.stats);
+  if (left_as_solved.empty())
+    untangle_remaining(state, map, progress);
+  else
+    map.stats.path = left_as_solved;
   return IgmResult{std::move(map.param), std::move(map.stats), escalate};
 }
 
