@@ -55,14 +55,15 @@ constexpr int kMaxWorkingBudgetGrowth = 4;
 // longer than the one the map was solved for (rescaled further, the solver's tolerances no longer
 // match the grid and results drift from a fresh run's).
 constexpr double kMaxSeamlessRescale = 2;
-// The seamless map's local repair pass ends after this many rounds (one turn of its four
-// strategies) over regions of at least half the part without fewer bad triangles; the global solve
-// in the field's frame and a second local pass follow. mnf07 with sharp edges at 60 degrees, 2 000
-// quads: rounds 0-7 brought its bad triangles 92 -> 5, rounds 8-23 stayed at 5-8 over 21 492 of its
-// 22 340 triangles (3-8 s a round), and the global solve then removed them. Rounds over small
-// regions go on (ogre's part 43: a single bad triangle for 7 rounds, then none; under 1 s a round,
-// while the global solve took about 25 s there).
-constexpr int kSeamlessStagnantRounds = 4;
+// The seamless map's local repair pass ends after this many rounds over regions of at least half
+// the part without fewer bad triangles; the global solve in the field's frame and a second local
+// pass follow. mnf07 with sharp edges at 60 degrees, 2 000 quads: rounds 0-7 brought its bad
+// triangles 92 -> 5, rounds 8-23 stayed at 5-8 over 21 492 of its 22 340 triangles (3-8 s a round),
+// and the global solve then removed them. It was one turn of the four strategies (4) while that
+// solve cost 15-45 s; with the slacks eliminated (stop 49) it costs about 7 s, and two wide rounds
+// at about 2 s each are the bound (mnf07: 21.0 -> 16.2 s, the same quads). Rounds over small
+// regions go on (ogre's part 43: a single bad triangle for 7 rounds, then none; under 1 s a round).
+constexpr int kSeamlessStagnantRounds = 2;
 // The cross field cancels pairs of singularities of index +1 and -1 (off features, at most 2 edges
 // apart) joined by a path of edges shorter than this share of the quad edge length: the layout
 // cannot keep them apart without a whole quad between them (a scan's noise makes many:
