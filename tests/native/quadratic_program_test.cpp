@@ -161,28 +161,27 @@ TEST(InteriorPointQP, ALinearProgramInABoxReachesItsCorner) {
   EXPECT_NEAR(r.x[1], -1, 1e-5);
 }
 
-TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
-  std::mt19937 rng(7);
-  for (int trial = 0; trial < 40; ++trial) {
-    const int cells = 10 + 37 * (trial % 8);
+// `trials` generated programs of base + step * (trial % sizes) cells, at the scales 1e-3, 1 and 1e3
+// in turn, each solved by both methods.
+void expect_agreement_over_trials(unsigned seed, int trials, int base, int step, int sizes, bool mixed_slacks) {
+  std::mt19937 rng(seed);
+  for (int trial = 0; trial < trials; ++trial) {
+    const int cells = base + step * (trial % sizes);
     const double scale = trial % 3 == 0 ? 1e-3 : (trial % 3 == 1 ? 1.0 : 1e3);
     SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(cells) + " cells, scale " +
                  std::to_string(scale));
-    expect_agrees_with_ipopt(repair_like_qp(cells, scale, rng), scale);
+    expect_agrees_with_ipopt(repair_like_qp(cells, scale, rng, mixed_slacks), scale);
   }
+}
+
+TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
+  expect_agreement_over_trials(7, 40, 10, 37, 8, false);
 }
 
 // Slacks the normal equations cannot eliminate by their own pivots (two in one row, or coupled
 // in the Hessian) stay in the factorized matrix beside those they can.
 TEST(InteriorPointQP, SlacksSharingARowOrTheHessianAgreeWithIpopt) {
-  std::mt19937 rng(11);
-  for (int trial = 0; trial < 12; ++trial) {
-    const int cells = 12 + 41 * (trial % 4);
-    const double scale = trial % 3 == 0 ? 1e-3 : (trial % 3 == 1 ? 1.0 : 1e3);
-    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(cells) + " cells, scale " +
-                 std::to_string(scale));
-    expect_agrees_with_ipopt(repair_like_qp(cells, scale, rng, true), scale);
-  }
+  expect_agreement_over_trials(11, 12, 12, 41, 4, true);
 }
 
 TEST(InteriorPointQP, SameProgramSameBits) {

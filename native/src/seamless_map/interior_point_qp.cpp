@@ -135,6 +135,7 @@ class NormalEquations {
   }
 
   int kept_variables() const { return sg_.kept; }
+  const Vec& weights() const { return w_; }  // w of the last assembly
 
   // K_u for the weights w, lower triangle.
   const SpMat& assemble(const Vec& w) {
@@ -305,12 +306,11 @@ class InteriorPoint {
   Vec times_transposed(const Vec& y) const { return cs_.ct * y; }  // C^T y
 
   Vec normal_times(const Vec& v) const {  // (H + C^T W C) v, W = Z/S of the last factorization
-    return qp_.hessian * v + times_transposed(w_.cwiseProduct(times(v)));
+    return qp_.hessian * v + times_transposed(normal_.weights().cwiseProduct(times(v)));
   }
 
   bool factor() {
-    w_ = z_.cwiseQuotient(s_);
-    const SpMat& k = normal_.assemble(w_);
+    const SpMat& k = normal_.assemble(z_.cwiseQuotient(s_));
     if (!analysed_) {
       cholesky_.analyzePattern(k);
       analysed_ = true;
@@ -368,7 +368,7 @@ class InteriorPoint {
   NormalEquations normal_;
   Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky_;
   bool analysed_ = false;
-  Vec x_, s_, z_, w_, hx_, rp_, rd_;  // w = z / s at the last factorization
+  Vec x_, s_, z_, hx_, rp_, rd_;
   double tolerance_ = 0;
   double hessian_scale_ = 1, primal_scale_ = 1, dual_scale_ = 1;
 };
