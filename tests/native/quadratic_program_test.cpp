@@ -59,8 +59,9 @@ std::vector<int> slack_rows(int cells, bool mixed) {
 // Laplacian-like energy towards a random target, sector-like rows a.x >= b that the target breaks
 // for some of them, elastic rows with a slack variable x_s >= 0 at a cost, and a start that is
 // infeasible. Scaled by `scale` to test the method's independence of units. With `mixed`, some
-// rows have two slacks, every third slack also has a quadratic cost, and every fifth is coupled to
-// the next one in the Hessian.
+// rows have two slacks, every third slack also has a quadratic cost, every fifth is coupled to
+// the next one in the Hessian, and every tenth cell starts a row of kLongRow variables.
+constexpr int kLongRow = 48;
 SparseQP repair_like_qp(int cells, double scale, std::mt19937& rng, bool mixed = false) {
   std::uniform_real_distribution<double> u(-1, 1);
   const std::vector<int> slack_row = slack_rows(cells, mixed);
@@ -92,6 +93,10 @@ SparseQP repair_like_qp(int cells, double scale, std::mt19937& rng, bool mixed =
   for (int k = 0; k < cells; ++k, ++row) {
     const int base = 2 * k;
     for (int j = 0; j < 6; ++j) c.emplace_back(row, base + j, u(rng));
+    lower.push_back(0.2 * u(rng) * scale);
+  }
+  for (int k = 0; mixed && 2 * k + kLongRow <= n_plain; k += 10, ++row) {
+    for (int j = 0; j < kLongRow; ++j) c.emplace_back(row, 2 * k + j, u(rng));
     lower.push_back(0.2 * u(rng) * scale);
   }
   for (int k = 0; k < slacks; ++k) c.emplace_back(slack_row[k], n_plain + k, k % 2 ? 1.0 : 0.5);
@@ -179,8 +184,9 @@ TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
 }
 
 // Slacks the normal equations cannot eliminate by their own pivots (two in one row, or coupled
-// in the Hessian) stay in the factorized matrix beside those they can.
-TEST(InteriorPointQP, SlacksSharingARowOrTheHessianAgreeWithIpopt) {
+// in the Hessian) stay in the factorized matrix beside those they can; long rows are summed into
+// the normal matrix by walking it, short ones by stored places.
+TEST(InteriorPointQP, SlacksSharingARowOrTheHessianAndLongRowsAgreeWithIpopt) {
   expect_agreement_over_trials(11, 12, 12, 41, 4, true);
 }
 

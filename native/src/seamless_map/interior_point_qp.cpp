@@ -115,10 +115,13 @@ SpMat kept_columns(const SpMat& m, const Singletons& sg) {
 // the kept variables u is then
 //     K_u = H_uu + C_u^T diag(w~) C_u,  w~_r = w_r - (w_r C_rj)^2 / p_j = w_r q_j / p_j
 // (w~ = w on other rows; the last form has no cancellation where w_r dwarfs q_j). Its pattern
-// depends on those of H and C only (w > 0): one symbolic analysis serves every iteration. Formed
-// by sparse products: a row with k entries adds k^2 products but few entries (a row of the
-// integer-grid map's repair on dragon-genus1 has 623: 110 M products, 2.3 M entries), so nothing
-// is stored per product.
+// depends on those of H and C only (w > 0): one symbolic analysis serves every iteration, and the
+// values are summed into that pattern in place, row by row of C (a row with entries a_1 < ... < a_k
+// adds w~_r C_ra C_rb at (b, a) for a <= b). Where each such product goes is stored for rows of up
+// to kStoredRowEntries entries. Longer rows would need too many places (a row of the integer-grid
+// map's repair on dragon-genus1 has 623 entries: 194 000 products; its field-frame solve without
+// cancelled pairs has 5 348 rows of 200 on average: 107 M products), so their products are summed
+// column by column of K into a dense column each time.
 class NormalEquations {
  public:
   NormalEquations(const SpMat& hessian, const Constraints& cs)
@@ -129,9 +132,15 @@ class NormalEquations {
     const SpMat h_kept = kept_columns(SpMat(kept_columns(hessian, sg_).transpose()), sg_);
     SpMat diagonal(sg_.kept, sg_.kept);  // explicit, so that the shift has entries to go to
     diagonal.setIdentity();
-    hessian_lower_ = SpMat(h_kept.triangularView<Eigen::Lower>()) + 0.0 * diagonal;
+    const SpMat hessian_lower = SpMat(h_kept.triangularView<Eigen::Lower>()) + 0.0 * diagonal;
     c_kept_ = kept_columns(cs.c, sg_);
     ct_kept_ = c_kept_.transpose();
+    const SpMat pattern = ct_kept_ * c_kept_;
+    k_ = hessian_lower + SpMat(pattern.triangularView<Eigen::Lower>());
+    k_.makeCompressed();
+    place_hessian(hessian_lower);
+    store_product_slots();
+    index_long_rows();
   }
 
   int kept_variables() const { return sg_.kept; }
@@ -149,9 +158,7 @@ class NormalEquations {
       pivot_[j] = own + w[r] * sg_.coeff[k] * sg_.coeff[k];
       reduced_w[r] = w[r] * own / pivot_[j];
     }
-    const SpMat weighted = ct_kept_ * reduced_w.asDiagonal();
-    const SpMat product = weighted * c_kept_;
-    k_ = hessian_lower_ + SpMat(product.triangularView<Eigen::Lower>());
+    add_products(reduced_w);
     return k_;
   }
 
@@ -178,12 +185,110 @@ class NormalEquations {
   }
 
  private:
+  static constexpr int kStoredRowEntries = 32;
+
+  int row_entries(int r) const { return ct_kept_.outerIndexPtr()[r + 1] - ct_kept_.outerIndexPtr()[r]; }
+
+  // Where each product of a short row goes in K: for every pair t <= s of its entries, in the
+  // order of add_products.
+  void store_product_slots() {
+    for (int r = 0; r < ct_kept_.cols(); ++r) {
+      const int k = row_entries(r);
+      if (k > kStoredRowEntries) continue;
+      const int* variable = ct_kept_.innerIndexPtr() + ct_kept_.outerIndexPtr()[r];
+      for (int t = 0; t < k; ++t) {
+        int slot = k_.outerIndexPtr()[variable[t]];
+        for (int s = t; s < k; ++s) {
+          while (k_.innerIndexPtr()[slot] != variable[s]) ++slot;
+          product_slot_.push_back(slot);
+        }
+      }
+    }
+  }
+
+  // H's lower triangle in K's pattern, the start of every assembly.
+  void place_hessian(const SpMat& hessian_lower) {
+    hessian_values_.assign(k_.nonZeros(), 0.0);
+    for (int j = 0; j < k_.cols(); ++j) {
+      int slot = k_.outerIndexPtr()[j];
+      for (SpMat::InnerIterator it(hessian_lower, j); it; ++it) {
+        while (k_.innerIndexPtr()[slot] != it.row()) ++slot;
+        hessian_values_[slot] = it.value();
+      }
+    }
+  }
+
+  // K = C^T diag(w) C + H on the kept variables, in place (H added last, as the products'
+  // sums can dwarf it).
+  void add_products(const Vec& w) {
+    double* value = k_.valuePtr();
+    std::fill(value, value + k_.nonZeros(), 0.0);
+    size_t stored = 0;
+    for (int r = 0; r < ct_kept_.cols(); ++r) {
+      const int k = row_entries(r);
+      if (k > kStoredRowEntries) continue;
+      const double* c = ct_kept_.valuePtr() + ct_kept_.outerIndexPtr()[r];
+      for (int t = 0; t < k; ++t) {
+        const double wc = w[r] * c[t];
+        for (int s = t; s < k; ++s) value[product_slot_[stored++]] += wc * c[s];
+      }
+    }
+    add_long_row_products(w);
+    for (size_t i = 0; i < hessian_values_.size(); ++i) value[i] += hessian_values_[i];
+  }
+
+  // The long rows' products, column by column of K: those of each row entry at or below the
+  // column are summed into a dense column, which is then gathered into K's pattern.
+  void add_long_row_products(const Vec& w) {
+    const int* row_start = ct_kept_.outerIndexPtr();
+    const int* variable = ct_kept_.innerIndexPtr();
+    const double* c = ct_kept_.valuePtr();
+    for (int j = 0; j < k_.cols(); ++j) {
+      if (long_entry_start_[j] == long_entry_start_[j + 1]) continue;
+      for (int e = long_entry_start_[j]; e < long_entry_start_[j + 1]; ++e) {
+        const int r = long_entry_row_[e], end = row_start[r + 1];
+        const double wc = w[r] * c[long_entry_[e]];
+        for (int i = long_entry_[e]; i < end; ++i) column_[variable[i]] += wc * c[i];
+      }
+      for (int slot = k_.outerIndexPtr()[j]; slot < k_.outerIndexPtr()[j + 1]; ++slot) {
+        k_.valuePtr()[slot] += column_[k_.innerIndexPtr()[slot]];
+        column_[k_.innerIndexPtr()[slot]] = 0;
+      }
+    }
+  }
+
+  // For every kept variable, the entries of the long rows in its column of C (as positions in
+  // ct_kept_).
+  void index_long_rows() {
+    long_entry_start_.assign(k_.cols() + 1, 0);
+    for (int r = 0; r < ct_kept_.cols(); ++r)
+      if (row_entries(r) > kStoredRowEntries)
+        for (int i = ct_kept_.outerIndexPtr()[r]; i < ct_kept_.outerIndexPtr()[r + 1]; ++i)
+          ++long_entry_start_[ct_kept_.innerIndexPtr()[i] + 1];
+    for (int j = 0; j < k_.cols(); ++j) long_entry_start_[j + 1] += long_entry_start_[j];
+    long_entry_.resize(long_entry_start_.back());
+    long_entry_row_.resize(long_entry_start_.back());
+    std::vector<int> next(long_entry_start_.begin(), long_entry_start_.end() - 1);
+    for (int r = 0; r < ct_kept_.cols(); ++r)
+      if (row_entries(r) > kStoredRowEntries)
+        for (int i = ct_kept_.outerIndexPtr()[r]; i < ct_kept_.outerIndexPtr()[r + 1]; ++i) {
+          const int e = next[ct_kept_.innerIndexPtr()[i]]++;
+          long_entry_[e] = i;
+          long_entry_row_[e] = r;
+        }
+    column_.assign(k_.cols(), 0.0);
+  }
+
   const Constraints& cs_;
   const Singletons sg_;
   const Vec hessian_diagonal_;
-  SpMat hessian_lower_, c_kept_, ct_kept_;
-  SpMat k_;
-  Vec w_, pivot_;  // the weights and pivots of the last assembly
+  SpMat c_kept_, ct_kept_;
+  SpMat k_;                                                          // its pattern is fixed at construction
+  std::vector<double> hessian_values_;                               // H's lower triangle in K's pattern
+  std::vector<int> product_slot_;                                    // where each product of a short row goes in K
+  std::vector<int> long_entry_start_, long_entry_, long_entry_row_;  // see index_long_rows
+  std::vector<double> column_;                                       // zero between assemblies
+  Vec w_, pivot_;                                                    // the weights and pivots of the last assembly
 };
 
 double max_abs(const Vec& v) { return v.size() ? v.lpNorm<Eigen::Infinity>() : 0.0; }
