@@ -249,9 +249,10 @@ using Solver = Eigen::CholmodDecomposition<ComplexSparse, Eigen::Lower>;
 
 // Ordering + symbolic analysis, then the numeric factorization, with a cancel check between
 // (CHOLMOD cannot be interrupted inside either step). Minimum degree (AMD): the field is solved on
-// the working mesh, and at its sizes AMD's fill is within 8 % of nested dissection's while its
-// analysis is 5-7 times cheaper (analysis + factorization, METIS against AMD: kitten's 28 944 faces
-// 0.15 / 0.09 s, 40 000 faces 0.17 / 0.08 s, 160 000 faces 0.91 / 0.38 s). CHOLMOD prints nothing.
+// the working mesh, and at its sizes AMD's fill is at most 19 % above nested dissection's (kitten;
+// within 7 % on five other meshes) while its analysis is 5-7 times cheaper (analysis +
+// factorization, METIS against AMD: kitten's 28 944 faces 0.15 / 0.09 s, 40 000 faces 0.17 /
+// 0.08 s, 160 000 faces 0.91 / 0.38 s). CHOLMOD prints nothing.
 void factorize(Solver& solver, const ComplexSparse& A, const Progress& progress) {
   pin_blas_kernels();
   solver.cholmod().print = 0;
