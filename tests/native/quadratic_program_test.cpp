@@ -55,13 +55,15 @@ std::vector<int> slack_rows(int cells, bool mixed) {
   return rows;
 }
 
+// Entries of the long rows of repair_like_qp's mixed programs.
+constexpr int kLongRow = 48;
+
 // A program shaped like a repair round's: a chain of "triangles" (3 variables pairs each) with a
 // Laplacian-like energy towards a random target, sector-like rows a.x >= b that the target breaks
 // for some of them, elastic rows with a slack variable x_s >= 0 at a cost, and a start that is
 // infeasible. Scaled by `scale` to test the method's independence of units. With `mixed`, some
 // rows have two slacks, every third slack also has a quadratic cost, every fifth is coupled to
 // the next one in the Hessian, and every tenth cell starts a row of kLongRow variables.
-constexpr int kLongRow = 48;
 SparseQP repair_like_qp(int cells, double scale, std::mt19937& rng, bool mixed = false) {
   std::uniform_real_distribution<double> u(-1, 1);
   const std::vector<int> slack_row = slack_rows(cells, mixed);
@@ -184,8 +186,9 @@ TEST(InteriorPointQP, AgreesWithIpoptOnGeneratedRepairPrograms) {
 }
 
 // Slacks the normal equations cannot eliminate by their own pivots (two in one row, or coupled
-// in the Hessian) stay in the factorized matrix beside those they can; long rows are summed into
-// the normal matrix by walking it, short ones by stored places.
+// in the Hessian) stay in the factorized matrix beside those they can; rows longer than the
+// solver's stored-places limit (32 entries) are summed into the normal matrix through a dense
+// column, shorter ones by stored places.
 TEST(InteriorPointQP, SlacksSharingARowOrTheHessianAndLongRowsAgreeWithIpopt) {
   expect_agreement_over_trials(11, 12, 12, 41, 4, true);
 }

@@ -258,24 +258,18 @@ class NormalEquations {
   }
 
   // For every kept variable, the entries of the long rows in its column of C (as positions in
-  // ct_kept_).
+  // ct_kept_, rows in increasing order). Columns are visited in increasing order, so each row's
+  // next entry is the one at its cursor.
   void index_long_rows() {
-    long_entry_start_.assign(k_.cols() + 1, 0);
-    for (int r = 0; r < ct_kept_.cols(); ++r)
-      if (row_entries(r) > kStoredRowEntries)
-        for (int i = ct_kept_.outerIndexPtr()[r]; i < ct_kept_.outerIndexPtr()[r + 1]; ++i)
-          ++long_entry_start_[ct_kept_.innerIndexPtr()[i] + 1];
-    for (int j = 0; j < k_.cols(); ++j) long_entry_start_[j + 1] += long_entry_start_[j];
-    long_entry_.resize(long_entry_start_.back());
-    long_entry_row_.resize(long_entry_start_.back());
-    std::vector<int> next(long_entry_start_.begin(), long_entry_start_.end() - 1);
-    for (int r = 0; r < ct_kept_.cols(); ++r)
-      if (row_entries(r) > kStoredRowEntries)
-        for (int i = ct_kept_.outerIndexPtr()[r]; i < ct_kept_.outerIndexPtr()[r + 1]; ++i) {
-          const int e = next[ct_kept_.innerIndexPtr()[i]]++;
-          long_entry_[e] = i;
-          long_entry_row_[e] = r;
-        }
+    std::vector<int> cursor(ct_kept_.outerIndexPtr(), ct_kept_.outerIndexPtr() + ct_kept_.cols());
+    long_entry_start_.assign(1, 0);
+    for (int j = 0; j < c_kept_.cols(); ++j) {
+      for (SpMat::InnerIterator it(c_kept_, j); it; ++it) {
+        const int r = static_cast<int>(it.row()), i = cursor[r]++;
+        if (row_entries(r) > kStoredRowEntries) long_entry_.push_back(i), long_entry_row_.push_back(r);
+      }
+      long_entry_start_.push_back(static_cast<int>(long_entry_.size()));
+    }
     column_.assign(k_.cols(), 0.0);
   }
 
