@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -90,6 +91,15 @@ std::vector<int> outgoing_halfedges(const TriMesh& mesh, int v) {
 bool is_boundary_vertex(const TriMesh& mesh, int v) {
   const int h = mesh.vertex_halfedge[v];
   return h >= 0 && mesh.opposite[h] < 0;
+}
+
+std::vector<double> vertex_angle_sums(const TriMesh& mesh) {
+  std::vector<double> sum(mesh.num_vertices(), 0.0);
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
+    sum[mesh.from(h)] += std::atan2(a.cross(b).norm(), a.dot(b));
+  }
+  return sum;
 }
 
 int count_boundary_loops(const TriMesh& mesh) {

@@ -65,6 +65,10 @@ std::vector<int> outgoing_halfedges(const TriMesh& mesh, int v);
 
 bool is_boundary_vertex(const TriMesh& mesh, int v);
 
+// Sum of the corner angles of its triangles at each vertex (radians; 2 pi where the surface is flat
+// inside). #V.
+std::vector<double> vertex_angle_sums(const TriMesh& mesh);
+
 // Number of boundary loops (cycles of boundary halfedges).
 int count_boundary_loops(const TriMesh& mesh);
 

@@ -31,6 +31,7 @@ struct TracedMap {
   std::vector<char> isoline_edges;  // #E: feature and boundary edges kept as isolines
   ExactParametrization exact;       // the seamless map, exact
   TMesh tmesh;
+  std::vector<char> tip_vertices;  // #V: sharp tips (sharp_tip_vertices), where layout points stay
 };
 
 // Stage 3: integer T-edge lengths.

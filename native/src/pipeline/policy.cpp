@@ -76,7 +76,8 @@ struct LayoutFlips {
 
 LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>& x, Progress& progress) {
   LayoutFlips flips;
-  flips.layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, x, progress);
+  flips.layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, x, progress, true,
+                                      state.traced->tip_vertices);
   QuadMesh& quads = flips.layout.quads;
   flips.flipped.assign(quads.num_quads(), 0);
   flips.valid = quad_mesh_defects(quad_topology(quads), state.euler_characteristic).empty();
@@ -231,7 +232,7 @@ std::optional<QuadChoice> quads_of_the_map(const ComponentState& state, Progress
 std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progress& progress, std::string* defects,
                                               bool* collapsed) {
   LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
-                                            state.quantization->result.x, progress);
+                                            state.quantization->result.x, progress, true, state.traced->tip_vertices);
   const QuadTopology topology = quad_topology(layout.quads);
   *defects = quad_mesh_defects(topology, state.euler_characteristic);
   *collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;
@@ -276,6 +277,14 @@ bool retry_without_cancelled_pairs(const ComponentState& state) {
 bool seamless_map_serves(double solved_for, double edge_length) {
   const double rescale = solved_for / edge_length;
   return std::max(rescale, 1 / rescale) <= kMaxSeamlessRescale * (1 + 1e-9);
+}
+
+std::vector<char> sharp_tip_vertices(const TriMesh& mesh) {
+  const std::vector<double> angle_sum = vertex_angle_sums(mesh);
+  std::vector<char> tips(mesh.num_vertices(), 0);
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    tips[v] = mesh.vertex_halfedge[v] >= 0 && !is_boundary_vertex(mesh, v) && angle_sum[v] < kMaxTipAngleSum;
+  return tips;
 }
 
 Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress) {

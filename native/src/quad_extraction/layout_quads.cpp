@@ -18,6 +18,7 @@ namespace {
 struct GridPoint {
   Vec3 position = Vec3::Zero();
   bool singular = false;
+  bool pinned = false;        // on a node at one of the caller's pinned vertices
   SurfacePoint point;         // where it lies in the map (face -1: unknown, found by projection)
   Vec2 along = Vec2::Zero();  // unit direction of its T-edge (from -> to) in point.face's chart
 };
@@ -193,13 +194,15 @@ struct CellGrid {
 class LayoutQuadExtractor {
  public:
   LayoutQuadExtractor(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
-                      const std::vector<int64_t>& x, Progress& progress, bool with_positions)
+                      const std::vector<int64_t>& x, Progress& progress, bool with_positions,
+                      const std::vector<char>& pinned_vertices)
       : mesh_(mesh),
         seamless_(seamless),
         tm_(tm),
         x_(x),
         progress_(progress),
         with_positions_(with_positions),
+        pinned_vertices_(pinned_vertices),
         ne_(static_cast<int>(tm.edges.size())) {}
 
   // All the phases; the layout without its time.
@@ -225,6 +228,7 @@ class LayoutQuadExtractor {
   const std::vector<int64_t>& x_;
   Progress& progress_;
   const bool with_positions_;
+  const std::vector<char>& pinned_vertices_;
   const int ne_;
   LayoutQuads result_;
   std::vector<int64_t> edge_first_;              // #edges: the id of each edge's first inner point
@@ -279,6 +283,8 @@ void LayoutQuadExtractor::place_node_and_edge_points() {
     const TMeshNode& node = tm_.nodes[n];
     points_[n].position = node.point.position(mesh_);
     points_[n].singular = node.singular();
+    points_[n].pinned = node.mesh_vertex >= 0 && node.mesh_vertex < static_cast<int>(pinned_vertices_.size()) &&
+                        pinned_vertices_[node.mesh_vertex];
     points_[n].point = node.point;
   }
   on_edge_.resize(ne_);
@@ -398,7 +404,8 @@ void LayoutQuadExtractor::place_inner_points(const CellGrid& g) {
     }
 }
 
-// Merge identified points (their positions averaged; singular if any member is).
+// Merge identified points (singular if any member is): at a pinned member if there is one (the
+// first), else at the average of their positions.
 void LayoutQuadExtractor::merge_points() {
   const int64_t total = static_cast<int64_t>(points_.size());
   vertex_of_.assign(total, -1);
@@ -410,16 +417,23 @@ void LayoutQuadExtractor::merge_points() {
       merged_.push_back(points_[p]);
       merged_.back().position = Vec3::Zero();
       merged_.back().singular = false;
+      merged_.back().pinned = false;
       members.push_back(0);
     }
     const int v = vertex_of_[p] = vertex_of_[r];
     GridPoint& m = merged_[v];
-    m.position += points_[p].position;
     m.singular = m.singular || points_[p].singular;
     ++members[v];
+    if (m.pinned) continue;
+    m.position += points_[p].position;
+    if (!points_[p].pinned) continue;
+    m.pinned = true;
+    m.position = points_[p].position;
+    m.point = points_[p].point;
   }
   result_.stats.merged_points = static_cast<int>(total - static_cast<int64_t>(merged_.size()));
   for (size_t v = 0; v < merged_.size(); ++v) {
+    if (merged_[v].pinned) continue;
     merged_[v].position /= members[v];
     if (members[v] > 1) merged_[v].point.face = -1;  // an average: project it
   }
@@ -465,11 +479,12 @@ void LayoutQuadExtractor::project_onto_surface() {
 }  // namespace
 
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tm,
-                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions) {
+                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions,
+                                 const std::vector<char>& pinned_vertices) {
   Timer timer;
   if (static_cast<int>(x.size()) != static_cast<int>(tm.edges.size()))
     throw Error(ErrorCode::InvalidArgument, "layout quads: x must have one length per T-edge");
-  LayoutQuads result = LayoutQuadExtractor(mesh, seamless, tm, x, progress, with_positions).run();
+  LayoutQuads result = LayoutQuadExtractor(mesh, seamless, tm, x, progress, with_positions, pinned_vertices).run();
   result.stats.seconds = timer.seconds();
   return result;
 }

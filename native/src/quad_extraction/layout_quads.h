@@ -9,7 +9,8 @@
 // parametric fraction; points inside a cell are found in the map: the cell is a rectangle there, and
 // a monotone blend of its four sides' point spacings places the inner points, each reached by a
 // straight walk from its bottom side point (a homeomorphism of the rectangle, so the grid lines do
-// not cross). Points merged by a collapse are averaged and projected onto the surface.
+// not cross). Points merged by a collapse are averaged and projected onto the surface, unless one
+// of them is a node on a pinned vertex (a sharp tip): they then lie there.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -42,10 +43,12 @@ struct LayoutQuads {
 // T-mesh was traced in (its traces' uv are in its charts); tmesh: the T-mesh with
 // four-sided cells; x: #edges integer lengths with Ax = 0 and x >= 0 (a valid quantization).
 // with_positions false: the connectivity only (every position zero, vertex_face -1; much faster).
+// pinned_vertices: #V flags of `mesh` (may be empty); points merged with a node on one lie on it.
 // Throws Error(InvalidArgument) on mismatched sizes or a cell whose opposite sides differ,
 // Error(Cancelled) on cancel.
 LayoutQuads extract_layout_quads(const TriMesh& mesh, const ExactParametrization& seamless, const TMesh& tmesh,
-                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions = true);
+                                 const std::vector<int64_t>& x, Progress& progress, bool with_positions = true,
+                                 const std::vector<char>& pinned_vertices = {});
 
 QGP_JSON_FIELDS(LayoutQuadsStats, quads, collapsed_cells, zero_edges, merged_points, walk_failures, seconds)
 
