@@ -122,7 +122,7 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
     double turning = boundary ? M_PI : 2 * M_PI;
     int holonomy = 0;
     for (int h : fan) {
-      turning -= test::corner_angle_at(mesh, h);
+      turning -= corner_angle(mesh, h);
       const int crossing = TriMesh::prev(h);
       if (mesh.opposite[crossing] >= 0) turning -= eps[crossing], holonomy += field.matching[crossing];
     }
@@ -153,7 +153,7 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
       // The corner between them: outgoing halfedge h1, incoming h0 = prev(h1).
       int h1 = constraint[0], h0 = constraint[1];
       if (TriMesh::prev(h1) != h0) std::swap(h0, h1);
-      const double beta = test::corner_angle_at(mesh, h1);
+      const double beta = corner_angle(mesh, h1);
       const double off = std::abs(M_PI / 4 - beta / 2);
       const double a1 = test::angle_in_chart(mesh, h1, field.direction[f]);
       const double a0 = test::angle_in_chart(mesh, h0, field.direction[f]);
@@ -185,11 +185,11 @@ void check_field(const TriMesh& mesh, const CrossField& field, double sharp_angl
     for (int j0 = start, j1; j0 < (boundary ? k : start + k); j0 = j1 + 1) {
       j1 = j0;
       bool touches_overconstrained = overconstrained_face[fan[j0 % k] / 3];
-      double swept = rho[fan[j0 % k]] + test::corner_angle_at(mesh, fan[j0 % k]);
+      double swept = rho[fan[j0 % k]] + corner_angle(mesh, fan[j0 % k]);
       while (!is_constraint(TriMesh::prev(fan[j1 % k]))) {
         swept += eps[TriMesh::prev(fan[j1 % k])];
         ++j1;
-        swept += test::corner_angle_at(mesh, fan[j1 % k]);
+        swept += corner_angle(mesh, fan[j1 % k]);
         touches_overconstrained |= overconstrained_face[fan[j1 % k] / 3];
       }
       swept -= rho[TriMesh::prev(fan[j1 % k])];

@@ -57,12 +57,6 @@ inline double angle_in_chart(const TriMesh& mesh, int h, const Vec3& u) {
   return std::atan2(v.dot(n.cross(u)), v.dot(u));
 }
 
-// Interior angle of face(h) at from(h).
-inline double corner_angle_at(const TriMesh& mesh, int h) {
-  const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
-
 // Angle between the normals of the two faces of interior edge e.
 inline double dihedral_angle(const TriMesh& mesh, int e) {
   const int h = mesh.edge_halfedge[e];

@@ -159,7 +159,7 @@ TEST(LayoutQuadsMeshes, PointsMergedWithAPinnedNodeLieOnIt) {
     ASSERT_EQ(test::run_until_stage(session, "igm"), "") << name;
     const ComponentState& state = session.components()[0];
     const TMesh& tm = state.traced->tmesh;
-    std::vector<char> pinned = state.traced->tip_vertices;
+    std::vector<char> pinned = state.tip_vertices;
     if (name != "cow.obj")
       for (const TMeshNode& n : tm.nodes)
         if (n.singular() && n.mesh_vertex >= 0) pinned[n.mesh_vertex] = 1;

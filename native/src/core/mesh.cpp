@@ -93,12 +93,14 @@ bool is_boundary_vertex(const TriMesh& mesh, int v) {
   return h >= 0 && mesh.opposite[h] < 0;
 }
 
+double corner_angle(const TriMesh& mesh, int h) {
+  const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
 std::vector<double> vertex_angle_sums(const TriMesh& mesh) {
   std::vector<double> sum(mesh.num_vertices(), 0.0);
-  for (int h = 0; h < mesh.num_halfedges(); ++h) {
-    const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
-    sum[mesh.from(h)] += std::atan2(a.cross(b).norm(), a.dot(b));
-  }
+  for (int h = 0; h < mesh.num_halfedges(); ++h) sum[mesh.from(h)] += corner_angle(mesh, h);
   return sum;
 }
 

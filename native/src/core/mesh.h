@@ -65,6 +65,9 @@ std::vector<int> outgoing_halfedges(const TriMesh& mesh, int v);
 
 bool is_boundary_vertex(const TriMesh& mesh, int v);
 
+// Interior angle of face(h) at from(h) (radians).
+double corner_angle(const TriMesh& mesh, int h);
+
 // Sum of the corner angles of its triangles at each vertex (radians; 2 pi where the surface is flat
 // inside). #V.
 std::vector<double> vertex_angle_sums(const TriMesh& mesh);

@@ -66,12 +66,6 @@ FaceFrames compute_frames(const TriMesh& mesh) {
   return fr;
 }
 
-// Interior angle of face(h) at from(h).
-double corner_angle(const TriMesh& mesh, int h) {
-  const Vec3 a = mesh.edge_vector(h), b = -mesh.edge_vector(TriMesh::prev(h));
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
-
 bool is_feature_halfedge(const TriMesh& mesh, const std::vector<char>& feature_edge, int h) {
   return mesh.opposite[h] < 0 || feature_edge[mesh.edge_of[h]];
 }

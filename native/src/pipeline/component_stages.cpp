@@ -78,7 +78,6 @@ void update_tmesh(ComponentState& state, Progress& progress) {
   TraceOptions trace_options;
   trace_options.feature_edges = traced.isoline_edges;
   traced.tmesh = trace_tmesh(state.mesh, exact.param, trace_options, progress);
-  traced.tip_vertices = sharp_tip_vertices(state.mesh);
   traced.exact = std::move(exact.param);
   state.traced.store(state.seamless.id(), std::move(traced));
 }

@@ -31,7 +31,6 @@ struct TracedMap {
   std::vector<char> isoline_edges;  // #E: feature and boundary edges kept as isolines
   ExactParametrization exact;       // the seamless map, exact
   TMesh tmesh;
-  std::vector<char> tip_vertices;  // #V: sharp tips (sharp_tip_vertices), where layout points stay
 };
 
 // Stage 3: integer T-edge lengths.
@@ -129,6 +128,7 @@ struct ComponentState {
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
   std::vector<int> face_map;        // component face -> intake mesh face (-1 when decimated)
   std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
+  std::vector<char> tip_vertices;   // #V of `mesh`: sharp tips (sharp_tip_vertices), where layout points stay
   int euler_characteristic = 0;     // of the intake component
   // A dense component of a remesh job is decimated to a working resolution for the target; the
   // quads are projected back onto the full-resolution component kept here.

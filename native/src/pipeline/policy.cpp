@@ -76,8 +76,8 @@ struct LayoutFlips {
 
 LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>& x, Progress& progress) {
   LayoutFlips flips;
-  flips.layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, x, progress, true,
-                                      state.traced->tip_vertices);
+  flips.layout =
+      extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh, x, progress, true, state.tip_vertices);
   QuadMesh& quads = flips.layout.quads;
   flips.flipped.assign(quads.num_quads(), 0);
   flips.valid = quad_mesh_defects(quad_topology(quads), state.euler_characteristic).empty();
@@ -232,7 +232,7 @@ std::optional<QuadChoice> quads_of_the_map(const ComponentState& state, Progress
 std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progress& progress, std::string* defects,
                                               bool* collapsed) {
   LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
-                                            state.quantization->result.x, progress, true, state.traced->tip_vertices);
+                                            state.quantization->result.x, progress, true, state.tip_vertices);
   const QuadTopology topology = quad_topology(layout.quads);
   *defects = quad_mesh_defects(topology, state.euler_characteristic);
   *collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;

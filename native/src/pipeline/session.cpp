@@ -249,6 +249,7 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
     }
   }
   split_faces_ += split_overconstrained_faces(state.mesh, state.feature_edges, state.vertex_map, state.face_map);
+  state.tip_vertices = sharp_tip_vertices(state.mesh);
   return state;
 }
 
