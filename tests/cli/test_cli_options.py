@@ -243,7 +243,7 @@ def test_features(qgp, meshes, tmp):
     by_angle = os.path.join(tmp, "angle.json")
     proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "angle.obj"), "--faces", 500, "--sharp-angle", 40,
                "--report", by_angle)
-    check(proc.returncode == 0 and json.load(open(by_angle))["field"]["feature_edges"] == len(sharp),
+    check(proc.returncode == 0 and json.load(open(by_angle))["working_mesh"]["input_feature_edges"] == len(sharp),
           "--sharp-angle 40: exactly the edges sharper than 40 degrees are features")
     pairs = os.path.join(tmp, "joint.feat")
     with open(pairs, "w") as f:
@@ -251,7 +251,7 @@ def test_features(qgp, meshes, tmp):
     by_file = os.path.join(tmp, "file.json")
     proc = run(qgp, "remesh", joint, "-o", os.path.join(tmp, "file.obj"), "--faces", 500, "--features", pairs,
                "--report", by_file)
-    check(proc.returncode == 0 and json.load(open(by_file))["field"]["feature_edges"] == len(sharp),
+    check(proc.returncode == 0 and json.load(open(by_file))["working_mesh"]["input_feature_edges"] == len(sharp),
           "--features FILE: the listed edges are the features")
     broken = os.path.join(tmp, "broken.feat")
     with open(broken, "w") as f:

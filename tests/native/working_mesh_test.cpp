@@ -54,7 +54,7 @@ TEST_P(WorkingMeshOverMeshes, KeepsTopologyFeaturesAndShape) {
   const std::vector<char> features = detect_feature_edges(mesh, {}, 40);
   const int budget = std::max(200, mesh.num_faces() / 4);
   Progress progress;
-  const WorkingMesh w = make_working_mesh(mesh, features, budget, progress);
+  const WorkingMesh w = make_working_mesh(mesh, features, budget, 0, progress);
   std::cout << name << ": " << mesh.num_faces() << " -> " << w.mesh.num_faces() << " faces (budget " << budget << ")"
             << std::endl;
   if (!w.decimated) {
@@ -116,7 +116,7 @@ TEST_P(WorkingMeshOverMeshes, IsTheInputBelowTheBudget) {
   const TriMesh mesh = test::component_mesh(intake, 0);
   Progress progress;
   const int budget = static_cast<int>(std::ceil(mesh.num_faces() / kDecimateAboveBudget));
-  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, 0, progress);
   EXPECT_FALSE(w.decimated);
   EXPECT_EQ(w.mesh.F, mesh.F);
   EXPECT_EQ(w.mesh.V, mesh.V);
@@ -146,7 +146,7 @@ TEST(WorkingMeshGenerated, DenseNoisyTorusReachesItsBudget) {
   }
   const int budget = 5000;
   Progress progress;
-  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, 0, progress);
   ASSERT_TRUE(w.decimated);
   EXPECT_LE(w.mesh.num_faces(), budget);
   EXPECT_GE(w.mesh.num_faces(), budget - 2);
@@ -158,7 +158,7 @@ TEST(WorkingMeshGenerated, DenseNoisyTorusReachesItsBudget) {
     const Vec3 outward = (centroid - ring).normalized();
     EXPECT_GT(w.mesh.face_normal_unnormalized(f).normalized().dot(outward), 0.5) << "face " << f;
   }
-  const WorkingMesh again = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, progress);
+  const WorkingMesh again = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), budget, 0, progress);
   EXPECT_EQ(again.mesh.F, w.mesh.F);
   EXPECT_EQ(again.vertex_of_input, w.vertex_of_input);
 }
@@ -170,7 +170,7 @@ TEST(WorkingMeshGenerated, DecimatedTowardOneFaceStaysAProperManifold) {
   for (const char* name : {"spot.obj", "torus.obj", "fertility.off"}) {
     const TriMesh mesh = test::component_mesh(test::load_mesh(name), 0);
     Progress progress;
-    const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), 1, progress);
+    const WorkingMesh w = make_working_mesh(mesh, std::vector<char>(mesh.num_edges(), 0), 1, 0, progress);
     ASSERT_TRUE(w.decimated) << name;
     std::cout << name << ": " << mesh.num_faces() << " -> " << w.mesh.num_faces() << " faces" << std::endl;
     EXPECT_EQ(w.mesh.num_vertices() - w.mesh.num_edges() + w.mesh.num_faces(),
@@ -195,6 +195,11 @@ TEST(WorkingMeshBudget, FivePerQuadAboveTheFloor) {
   EXPECT_EQ(working_face_budget(0), kMinWorkingFaces);
   EXPECT_EQ(working_face_budget(1e6), kWorkingFacesPerQuad * 1000000);
   EXPECT_EQ(working_face_budget(1e12), 1000000000);
+  // A remeshed part: five per quad, above its share of the floor.
+  EXPECT_EQ(remesh_face_budget(8000, 1), 40000);
+  EXPECT_EQ(remesh_face_budget(100, 1), kMinWorkingFaces);
+  EXPECT_EQ(remesh_face_budget(100, 0.01), 500);
+  EXPECT_EQ(remesh_face_budget(10, 0.001), 50);
 }
 
 }  // namespace

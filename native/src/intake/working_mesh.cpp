@@ -1,11 +1,14 @@
 #include "intake/working_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 
 #include "core/error.h"
 #include "intake/edge_collapse.h"
+#include "intake/isotropic_remesh.h"
 
 namespace qgp {
 
@@ -18,6 +21,23 @@ bool same_topology(const TriMesh& input, const TriMesh& working) {
   return chi_in == chi_out && count_boundary_loops(input) == count_boundary_loops(working);
 }
 
+// About max_faces equilateral triangles over the mesh's area.
+std::optional<WorkingMesh> remeshed_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges,
+                                                 int max_faces) {
+  double area = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) area += 0.5 * mesh.face_normal_unnormalized(f).norm();
+  IsotropicRemeshOptions options;
+  options.edge_length = std::sqrt(area / (max_faces * std::sqrt(3.0) / 4));
+  std::optional<RemeshedSurface> remeshed = remesh_isotropic(mesh, feature_edges, options);
+  if (!remeshed) return std::nullopt;
+  WorkingMesh result;
+  result.mesh = std::move(remeshed->mesh);
+  result.feature_edges = std::move(remeshed->feature_edges);
+  result.vertex_of_input = std::move(remeshed->nearest_input_vertex);
+  result.remeshed = true;
+  return result;
+}
+
 }  // namespace
 
 int working_face_budget(double target_quads) {
@@ -25,8 +45,17 @@ int working_face_budget(double target_quads) {
   return static_cast<int>(std::min(std::max(budget, double(kMinWorkingFaces)), 1e9));
 }
 
+int remesh_face_budget(double target_quads, double area_share) {
+  const double faces = std::max(kWorkingFacesPerQuad * target_quads, kMinWorkingFaces * area_share);
+  return static_cast<int>(std::min(std::max(faces, 1.0), 1e9));  // NaN: 1
+}
+
 WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges, int max_faces,
-                              Progress& progress) {
+                              int remesh_faces, Progress& progress) {
+  const bool has_features = std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end();
+  if (remesh_faces > 0 && has_features && needle_area_share(mesh) > kRemeshAboveNeedleShare)
+    if (std::optional<WorkingMesh> remeshed = remeshed_working_mesh(mesh, feature_edges, remesh_faces))
+      return *remeshed;
   auto keep_input = [&] {
     WorkingMesh copy;
     copy.mesh = mesh;

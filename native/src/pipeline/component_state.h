@@ -124,15 +124,18 @@ struct QuantizationKey {
 struct ComponentState {
   // The component, fixed once prepared (a new one is prepared when features or the working
   // resolution change).
-  TriMesh mesh;                     // the component as its own mesh (the working mesh if decimated)
+  TriMesh mesh;                     // the component as its own mesh (or its working mesh)
   std::vector<int> vertex_map;      // component vertex -> intake mesh vertex
-  std::vector<int> face_map;        // component face -> intake mesh face (-1 when decimated)
+  std::vector<int> face_map;        // component face -> intake mesh face (-1 on a working mesh)
   std::vector<char> feature_edges;  // #E of `mesh`: caller's and dihedral-angle feature edges
   std::vector<char> tip_vertices;   // #V of `mesh`: sharp tips (sharp_tip_vertices), where layout points stay
   int euler_characteristic = 0;     // of the intake component
-  // A dense component of a remesh job is decimated to a working resolution for the target; the
-  // quads are projected back onto the full-resolution component kept here.
+  // A dense component of a remesh job is decimated to a working resolution for the target, and a
+  // needle-covered one with features is remeshed isotropically (intake/working_mesh.h); the quads
+  // are projected back onto the component itself, kept here.
   std::optional<TriMesh> full_mesh;
+  bool remeshed = false;                 // full_mesh was remeshed, not decimated
+  int input_feature_edges = 0;           // feature edges of the component itself (not of a working mesh)
   std::vector<int> full_face_map;        // full_mesh face -> intake mesh face
   std::vector<char> full_feature_edges;  // #E of full_mesh
   int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)

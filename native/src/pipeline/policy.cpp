@@ -593,7 +593,7 @@ namespace {
 // The component's working triangles, decimated to `max_faces` when it has more than twice as many,
 // split into quads on the component's surface.
 QuadChoice split_triangles_on_surface(const ComponentState& state, int max_faces, Progress& progress) {
-  const WorkingMesh coarse = make_working_mesh(state.mesh, state.feature_edges, max_faces, progress);
+  const WorkingMesh coarse = make_working_mesh(state.mesh, state.feature_edges, max_faces, 0, progress);
   QuadChoice choice;
   choice.source = QuadSource::SplitTriangles;
   QuadMesh& quads = choice.extraction.quads;

@@ -51,16 +51,17 @@ void to_json(Json& j, const QuadChoice& choice) {
 }
 
 Json working_mesh_report(const std::vector<ComponentState>& components) {
-  int decimated = 0, input_faces = 0, working_faces = 0;
+  int decimated = 0, remeshed = 0, input_faces = 0, working_faces = 0, feature_edges = 0;
   for (const ComponentState& state : components) {
-    decimated += state.full_mesh.has_value();
+    feature_edges += state.input_feature_edges;
+    decimated += state.full_mesh.has_value() && !state.remeshed;
+    remeshed += state.remeshed;
     input_faces += state.full_mesh ? state.full_mesh->num_faces() : state.mesh.num_faces();
     working_faces += state.mesh.num_faces();
   }
-  return {{"decimated_components", decimated},
-          {"input_faces", input_faces},
-          {"working_faces", working_faces},
-          {"faces_per_quad", kWorkingFacesPerQuad},
+  return {{"decimated_components", decimated},    {"remeshed_components", remeshed},
+          {"input_faces", input_faces},           {"working_faces", working_faces},
+          {"input_feature_edges", feature_edges}, {"faces_per_quad", kWorkingFacesPerQuad},
           {"min_faces", kMinWorkingFaces}};
 }
 

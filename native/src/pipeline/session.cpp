@@ -1,5 +1,6 @@
 #include "pipeline/session.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -20,7 +21,7 @@ namespace qgp {
 namespace {
 
 // Per quad of `part`, the intake face under its centre: the face of the component's surface (its
-// full mesh when the working mesh is decimated) closest to the mean of its corners; -1 where none
+// full mesh when it has a working mesh) closest to the mean of its corners; -1 where none
 // is known. A quad's material and face attributes come from that face: the face under a corner
 // (where extraction started the quad) can lie a quad's half-diagonal away, across a material split.
 std::vector<int> intake_faces_under_quad_centres(const QuadMesh& part, const ComponentState& state) {
@@ -179,11 +180,14 @@ void Session::run_intake_stage(Progress& progress) {
 
 double Session::target_edge_length() const {
   if (options_.edge_length > 0) return options_.edge_length;
-  const double faces = asked_quads();
+  return std::sqrt(intake_area() / asked_quads());
+}
+
+double Session::intake_area() const {
   double area = 0;
   const TriMesh& m = intake_->mesh;
   for (int f = 0; f < m.num_faces(); ++f) area += 0.5 * m.face_normal_unnormalized(f).norm();
-  return std::sqrt(area / faces);
+  return area;
 }
 
 double Session::component_area(int component) const {
@@ -234,14 +238,19 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
     if (features[intake_->mesh.edge_of[global_h]]) caller[state.mesh.edge_of[h]] = 1;
   }
   state.feature_edges = detect_feature_edges(state.mesh, caller, options_.sharp_angle_deg);
+  state.input_feature_edges = static_cast<int>(std::count(state.feature_edges.begin(), state.feature_edges.end(), 1));
   if (job == Job::Remesh) {
-    state.working_face_budget = component_face_budget(c, target_edge_length());
-    WorkingMesh working = make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, progress);
-    if (working.decimated) {
+    const double edge_length = target_edge_length(), area = component_area(c);
+    state.working_face_budget = component_face_budget(c, edge_length);
+    const int remesh_faces = remesh_face_budget(area / (edge_length * edge_length), area / intake_area());
+    WorkingMesh working =
+        make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, remesh_faces, progress);
+    if (working.replaces_input()) {
       for (int& v : working.vertex_of_input) v = state.vertex_map[v];
       state.full_mesh = std::move(state.mesh);
       state.full_face_map = std::move(state.face_map);
       state.full_feature_edges = std::move(state.feature_edges);
+      state.remeshed = working.remeshed;
       state.mesh = std::move(working.mesh);
       state.vertex_map = std::move(working.vertex_of_input);
       state.face_map.assign(state.mesh.num_faces(), -1);
@@ -581,7 +590,7 @@ void Session::fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& ma
   // needles, caps), and those whose input vertex a needle's collapse merged away. They get the map of
   // the triangle made from their input triangle, else of the one nearest its centroid, extended
   // affinely: one chart, a (nearly) degenerate uv triangle where the 3D one is. Triangles of
-  // components remeshed on a decimated working mesh stay NaN (their map is not on these triangles).
+  // components remeshed on a working mesh stay NaN (their map is not on these triangles).
   std::vector<std::unique_ptr<TriangleBvh>> bvh(components_.size());
   std::vector<char> kept(input_.num_faces(), 0), failed(input_.num_faces(), 0);
   for (int f : intake_->input_face) kept[f] = 1;

@@ -82,6 +82,7 @@ class Session {
   bool prepared_components_fit(Job job) const;
   ComponentState prepare_component(int component, const std::vector<char>& features, Job job, Progress& progress);
   int component_face_budget(int component, double edge_length) const;  // working-mesh faces
+  double intake_area() const;                                          // of the whole repaired mesh
   double component_area(int component) const;
   // Per component its share of the quad count asked, by area; zeros when an edge length was asked.
   std::vector<double> component_quad_targets() const;

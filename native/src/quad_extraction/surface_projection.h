@@ -1,5 +1,5 @@
 // Closest points on a triangle surface (axis-aligned bounding-box tree) and the projection of quad
-// vertices back onto the original surface when the working mesh was decimated.
+// vertices back onto the original surface when they come from a working mesh (decimated or remeshed).
 #pragma once
 #include <array>
 #include <vector>
