@@ -118,7 +118,7 @@ def process(binding, blender_mesh, path, args):
             entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
             if figures.get("rescued_parts", 0):
                 entry["reason"] = (f"{figures['rescued_parts']} part(s) quadded again: with another field, "
-                                   "finer or by splitting their triangles")
+                                   "on a remesh, finer or by splitting their triangles")
         if args.atlas:
             if "atlas" not in figures:
                 raise RuntimeError("no texture atlas: " + str(figures.get("atlas_note", "")))

@@ -499,7 +499,7 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
         if warn:  # the count asked for could not be met: why, and the fewest quads where that is the reason
             message += f"; {obj['qgp']['count_note']}"
         rescued = report.get("rescued_components", [])
-        if rescued:  # parts whose layout gave no quads, quadded again (another field, finer or split)
+        if rescued:  # parts whose layout gave no quads, quadded again (another field, remesh, finer or split)
             message += f"; rescued: {_failed_parts(rescued)}"
         failed = report.get("failed_components", [])
         if failed:  # the parts kept as triangles are selected, so Edit Mode shows them

@@ -427,6 +427,7 @@ void print_remesh_summary(const qgp::Json& report) {
 // How a rescued component was quadded, for its warning.
 std::string rescue_phrase(const qgp::Json& rescued) {
   if (rescued["rescue"] == "split triangles") return "by splitting its triangles";
+  if (rescued["rescue"] == "isotropic working mesh") return "on an isotropic remesh of its triangles";
   if (rescued["rescue"] == "finer density")
     return "at " + rescued["edge_length_factor"].dump() + " of the quad edge length";
   return "again with the cross field that keeps its close singularity pairs";

@@ -45,6 +45,11 @@ int working_face_budget(double target_quads) {
   return static_cast<int>(std::min(std::max(budget, double(kMinWorkingFaces)), 1e9));
 }
 
+bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges) {
+  return std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end() &&
+         needle_area_share(mesh) > kRemeshAboveNeedleShare;
+}
+
 int remesh_face_budget(double target_quads, double area_share) {
   const double faces = std::max(kWorkingFacesPerQuad * target_quads, kMinWorkingFaces * area_share);
   return static_cast<int>(std::min(std::max(faces, 1.0), 1e9));  // NaN: 1
@@ -52,8 +57,7 @@ int remesh_face_budget(double target_quads, double area_share) {
 
 WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges, int max_faces,
                               int remesh_faces, Progress& progress) {
-  const bool has_features = std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end();
-  if (remesh_faces > 0 && has_features && needle_area_share(mesh) > kRemeshAboveNeedleShare)
+  if (remesh_faces > 0 && has_needles_across_features(mesh, feature_edges))
     if (std::optional<WorkingMesh> remeshed = remeshed_working_mesh(mesh, feature_edges, remesh_faces))
       return *remeshed;
   auto keep_input = [&] {

@@ -37,16 +37,15 @@ int remesh_face_budget(double target_quads, double area_share);
 // Only components with more than this many times their budget are decimated (below, the gain in
 // time is small and the input's own triangles are the better surface).
 constexpr double kDecimateAboveBudget = 2;
-// Components with feature edges whose needle triangles (smallest angle under kNeedleAngleDeg)
-// cover more than this share of their area are remeshed isotropically to the face budget instead:
-// the seamless map keeps every feature edge on an isoline, and through needles it folds
-// (featuretype with edges over 40 degrees: 15 flipped triangles, so no quads). Without features
-// the map stays valid on the needles, and a remesh there rounds CAD corners more (joint at 8 000
-// quads: Hausdorff distance 0.70 -> 1.43 %).
+// A component with feature edges whose needle triangles (smallest angle under kNeedleAngleDeg)
+// cover more than this share of its area can be remeshed isotropically (pipeline/policy.h says
+// when): the seamless map keeps every feature edge on an isoline, and through needles it may fold
+// (featuretype with edges over 40 degrees: 15 flipped triangles, so no quads).
 constexpr double kRemeshAboveNeedleShare = 0.1;
+bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges);
 
 // mesh: one connected, oriented, manifold component (connectivity built); feature_edges: #E.
-// With remesh_faces > 0, a component with features over kRemeshAboveNeedleShare is remeshed to about
+// With remesh_faces > 0, a component that has_needles_across_features is remeshed to about
 // remesh_faces equilateral triangles. Otherwise decimates to max_faces when mesh has more than
 // kDecimateAboveBudget * max_faces faces, as far as the locks and the quality checks allow (the
 // budget may stay out of reach); otherwise, or when no collapse is possible, returns a copy.

@@ -131,8 +131,8 @@ struct ComponentState {
   std::vector<char> tip_vertices;   // #V of `mesh`: sharp tips (sharp_tip_vertices), where layout points stay
   int euler_characteristic = 0;     // of the intake component
   // A dense component of a remesh job is decimated to a working resolution for the target, and a
-  // needle-covered one with features is remeshed isotropically (intake/working_mesh.h); the quads
-  // are projected back onto the component itself, kept here.
+  // needle-covered one with features that failed on its own triangles is remeshed isotropically
+  // (intake/working_mesh.h); the quads are projected back onto the component itself, kept here.
   std::optional<TriMesh> full_mesh;
   bool remeshed = false;                 // full_mesh was remeshed, not decimated
   int input_feature_edges = 0;           // feature edges of the component itself (not of a working mesh)
@@ -157,9 +157,10 @@ struct ComponentState {
   double finer_edge_factor = 1;
   std::optional<QuadChoice> split_quads;
   bool without_cancelled_pairs = false;
+  bool rescued_on_remesh = false;  // quadded on an isotropic remesh (remeshed) after failing on its own
   // Whether the component has quads in the last run: its own, or those of a rescue.
   bool quadded() const {
-    return !failure || finer_edge_factor < 1 || split_quads.has_value() || without_cancelled_pairs;
+    return !failure || finer_edge_factor < 1 || split_quads.has_value() || without_cancelled_pairs || rescued_on_remesh;
   }
   const QuadChoice& quad_choice() const { return split_quads ? *split_quads : *quads; }
 

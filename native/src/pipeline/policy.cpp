@@ -270,6 +270,11 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
   options.field_frame_solve = false;
 }
 
+bool retry_on_isotropic_remesh(const ComponentState& state, Job job) {
+  return job == Job::Remesh && state.failure && !state.full_mesh &&
+         has_needles_across_features(state.mesh, state.feature_edges);
+}
+
 bool retry_without_cancelled_pairs(const ComponentState& state) {
   return state.failure && field_cancelled_pairs(state) && finer_density_may_help(state.failure->stage);
 }

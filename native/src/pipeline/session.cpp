@@ -227,7 +227,8 @@ bool Session::prepared_components_fit(Job job) const {
   return true;
 }
 
-ComponentState Session::prepare_component(int c, const std::vector<char>& features, Job job, Progress& progress) {
+ComponentState Session::prepare_component(int c, const std::vector<char>& features, Job job, bool remesh,
+                                          Progress& progress) {
   ComponentState state;
   state.mesh = extract_component(*intake_, c, &state.vertex_map, &state.face_map);
   state.euler_characteristic = intake_->components[c].euler_characteristic;
@@ -242,7 +243,7 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
   if (job == Job::Remesh) {
     const double edge_length = target_edge_length(), area = component_area(c);
     state.working_face_budget = component_face_budget(c, edge_length);
-    const int remesh_faces = remesh_face_budget(area / (edge_length * edge_length), area / intake_area());
+    const int remesh_faces = remesh ? remesh_face_budget(area / (edge_length * edge_length), area / intake_area()) : 0;
     WorkingMesh working =
         make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, remesh_faces, progress);
     if (working.replaces_input()) {
@@ -262,17 +263,20 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
   return state;
 }
 
+std::vector<char> Session::intake_feature_edges() {
+  return map_input_edges(*intake_, half_ ? half_->feature_edges : options_.feature_edges, &unmatched_features_);
+}
+
 void Session::prepare_components(Job job, Progress& progress) {
   if (prepared_components_fit(job)) return;
   Timer timer;
   progress.begin_stage("working_mesh");
   components_.clear();
   split_faces_ = 0;
-  const std::vector<char> features =
-      map_input_edges(*intake_, half_ ? half_->feature_edges : options_.feature_edges, &unmatched_features_);
+  const std::vector<char> features = intake_feature_edges();
   const int n = static_cast<int>(intake_->components.size());
   for (int c = 0; c < n; ++c) {
-    components_.push_back(prepare_component(c, features, job, progress));
+    components_.push_back(prepare_component(c, features, job, false, progress));
     progress.update(static_cast<double>(c + 1) / n);
   }
   report_["timings_s"]["working_mesh"] = timer.seconds();
@@ -354,6 +358,23 @@ bool Session::quad_at_edge_factor(ComponentState& state, double factor, double t
   }
 }
 
+bool Session::quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress) {
+  ComponentState remeshed = prepare_component(c, intake_feature_edges(), job, true, progress);
+  if (!remeshed.remeshed) return false;
+  try {
+    update_cross_field(remeshed, target_edge_length(), true, progress);
+    update_cut_graph(remeshed, progress);
+  } catch (const Error& e) {
+    rethrow_unless_rung_failed(e);
+    return false;
+  }
+  if (!quad_at_edge_factor(remeshed, 1, target_quads, job, progress)) return false;
+  remeshed.failure = state.failure;  // why its own triangles gave no quads
+  remeshed.rescued_on_remesh = true;
+  state = std::move(remeshed);
+  return true;
+}
+
 bool Session::quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress) {
   try {
     update_cross_field(state, target_edge_length(), false, progress);
@@ -404,6 +425,9 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
     ComponentState& state = components_[c];
     if (!state.failure || state.failure->code != ErrorCode::StageFailed) continue;  // e.g. a degenerate part
     const double target = targets[c];
+    if (retry_on_isotropic_remesh(state, job) &&
+        quad_on_isotropic_remesh(state, static_cast<int>(c), target, job, progress))
+      continue;
     if (retry_without_cancelled_pairs(state) && quad_without_cancelled_pairs(state, target, job, progress)) continue;
     try {
       state.split_quads = quads_of_split_triangles(state, target, progress);
@@ -416,6 +440,7 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
     if (finer_density_may_help(state.failure->stage) && quad_at_finer_density(state, target, most, job, progress))
       state.split_quads.reset();
   }
+  report_["working_mesh"] = working_mesh_report(components_);  // parts rescued on a remesh
   report_["timings_s"]["rescue"] = timer.seconds();
   throw_if_every_component_failed();
 }
@@ -483,6 +508,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
     state.split_quads.reset();
     state.finer_edge_factor = 1;
     state.without_cancelled_pairs = false;
+    state.rescued_on_remesh = false;
   }
   report_["working_mesh"] = working_mesh_report(components_);
   add_preparation_repairs();
@@ -530,20 +556,21 @@ void Session::note_rescued_components(Json rescued) {
   int64_t quads = 0;
   for (const Json& s : rescued) quads += s["quads"].get<int64_t>();
   Json& count = report_["quantization"]["count"];
-  std::string made;
-  if (count.contains("target"))
-    made = std::to_string(std::lround(count["target"].get<double>())) + " quads asked, " +
+  std::string made;  // the count asked (not the quantization's, 0 when no part got that far)
+  if (!(options_.edge_length > 0))
+    made = std::to_string(std::lround(asked_quads() * options_.symmetry.copies())) + " quads asked, " +
            std::to_string(report_["quad"].value("faces", 0)) + " made: ";
   count["note"] = made + std::to_string(rescued.size()) +
                   " part(s) rescued (their layouts gave no valid quads, or flipped ones) with " +
                   std::to_string(quads) +
-                  " quads, with the field without cancelled singularity pairs, at a finer density or by "
-                  "splitting their triangles (report: rescued_components)";
+                  " quads, on an isotropic remesh of their triangles, with the field without cancelled "
+                  "singularity pairs, at a finer density or by splitting their triangles (report: rescued_components)";
   report_["rescued_components"] = std::move(rescued);
 }
 
 namespace {
 const char* rescue_name(const ComponentState& state) {
+  if (state.rescued_on_remesh) return "isotropic working mesh";
   if (state.split_quads) return "split triangles";
   return state.finer_edge_factor < 1 ? "finer density" : "field without cancelled pairs";
 }

@@ -80,7 +80,10 @@ class Session {
   void run_remesh_stages(Job job, Progress& progress);
   void prepare_components(Job job, Progress& progress);
   bool prepared_components_fit(Job job) const;
-  ComponentState prepare_component(int component, const std::vector<char>& features, Job job, Progress& progress);
+  // remesh: a needle-covered component with features runs on an isotropic remesh of itself.
+  ComponentState prepare_component(int component, const std::vector<char>& features, Job job, bool remesh,
+                                   Progress& progress);
+  std::vector<char> intake_feature_edges();                            // the caller's feature edges on the intake mesh
   int component_face_budget(int component, double edge_length) const;  // working-mesh faces
   double intake_area() const;                                          // of the whole repaired mesh
   double component_area(int component) const;
@@ -114,6 +117,9 @@ class Session {
   // The component's quads at the density asked with the field without cancelled close pairs;
   // false if a stage failed.
   bool quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress);
+  // Component c's quads on an isotropic remesh of its triangles (policy.h: retry_on_isotropic_remesh);
+  // false (state unchanged) if the remesh does not apply or a stage failed.
+  bool quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress);
   // The component's quads alone at `factor` of the quad edge length asked; false if a stage failed.
   bool quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job, Progress& progress);
   // A remesh component whose quads stay flipped, at the finer densities of kFinerEdgeFactors in
