@@ -358,17 +358,21 @@ bool Session::quad_at_edge_factor(ComponentState& state, double factor, double t
   }
 }
 
-bool Session::quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress) {
-  ComponentState remeshed = prepare_component(c, intake_feature_edges(), job, true, progress);
-  if (!remeshed.remeshed) return false;
+bool Session::quad_with_field(ComponentState& state, bool cancel_pairs, double target_quads, Job job,
+                              Progress& progress) {
   try {
-    update_cross_field(remeshed, target_edge_length(), true, progress);
-    update_cut_graph(remeshed, progress);
+    update_cross_field(state, target_edge_length(), cancel_pairs, progress);
+    update_cut_graph(state, progress);
   } catch (const Error& e) {
     rethrow_unless_rung_failed(e);
     return false;
   }
-  if (!quad_at_edge_factor(remeshed, 1, target_quads, job, progress)) return false;
+  return quad_at_edge_factor(state, 1, target_quads, job, progress);
+}
+
+bool Session::quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress) {
+  ComponentState remeshed = prepare_component(c, intake_feature_edges(), job, true, progress);
+  if (!remeshed.remeshed || !quad_with_field(remeshed, true, target_quads, job, progress)) return false;
   remeshed.failure = state.failure;  // why its own triangles gave no quads
   remeshed.rescued_on_remesh = true;
   state = std::move(remeshed);
@@ -376,14 +380,7 @@ bool Session::quad_on_isotropic_remesh(ComponentState& state, int c, double targ
 }
 
 bool Session::quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress) {
-  try {
-    update_cross_field(state, target_edge_length(), false, progress);
-    update_cut_graph(state, progress);
-  } catch (const Error& e) {
-    rethrow_unless_rung_failed(e);
-    return false;
-  }
-  if (!quad_at_edge_factor(state, 1, target_quads, job, progress)) return false;
+  if (!quad_with_field(state, false, target_quads, job, progress)) return false;
   state.without_cancelled_pairs = true;
   return true;
 }

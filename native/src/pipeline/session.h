@@ -120,6 +120,9 @@ class Session {
   // Component c's quads on an isotropic remesh of its triangles (policy.h: retry_on_isotropic_remesh);
   // false (state unchanged) if the remesh does not apply or a stage failed.
   bool quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress);
+  // The component's quads at the density asked with its field computed again (cancel_pairs: with
+  // close +1/-1 pairs cancelled); false if a stage failed.
+  bool quad_with_field(ComponentState& state, bool cancel_pairs, double target_quads, Job job, Progress& progress);
   // The component's quads alone at `factor` of the quad edge length asked; false if a stage failed.
   bool quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job, Progress& progress);
   // A remesh component whose quads stay flipped, at the finer densities of kFinerEdgeFactors in
