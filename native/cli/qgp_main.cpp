@@ -438,7 +438,7 @@ void print_rescued_components(const qgp::Json& report) {
   for (const auto& s : report.value("rescued_components", qgp::Json::array()))
     std::cerr << "qgp: warning: component " << s["component"] << " (" << s["triangles"] << " triangles) quadded "
               << rescue_phrase(s) << " into " << s["quads"]
-              << " quads, as its layout gave none valid: " << s["stage"].get<std::string>() << ": "
+              << " quads, as its own gave none valid: " << s["stage"].get<std::string>() << ": "
               << s["message"].get<std::string>() << "\n";
 }
 

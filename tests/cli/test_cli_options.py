@@ -327,7 +327,7 @@ def test_rescued_parts(qgp, meshes, tmp):
           f"featuretype unwelded ({r['input']['components']} parts): exit 0, status ok "
           f"({len(rescued)} part(s) rescued)")
     check(all(f"component {p['component']} ({p['triangles']} triangles) quadded " in proc.stderr
-              and f"into {p['quads']} quads, as its layout gave none valid: {p['stage']}: {p['message']}" in proc.stderr
+              and f"into {p['quads']} quads, as its own gave none valid: {p['stage']}: {p['message']}" in proc.stderr
               for p in rescued), "stderr names every rescued part, with its stage and reason")
     check("rescued" in r["quantization"]["count"]["note"], "the count note names the rescue")
     vertices, faces, _ = read_obj(out)

@@ -20,32 +20,6 @@
 namespace qgp {
 namespace {
 
-// A closed cylinder as CAD exports it: each side a quad cut into two needles from cap to cap, each
-// cap a fan from one rim vertex (needles again). Its rims are feature curves.
-TriMesh make_fan_cylinder(int segments, double radius, double height) {
-  TriMesh mesh;
-  mesh.V.resize(2 * segments, 3);
-  for (int i = 0; i < segments; ++i) {
-    const double a = 2 * M_PI * i / segments;
-    mesh.V.row(i) << radius * std::cos(a), radius * std::sin(a), 0;
-    mesh.V.row(segments + i) << radius * std::cos(a), radius * std::sin(a), height;
-  }
-  std::vector<std::array<int, 3>> faces;
-  for (int i = 0; i < segments; ++i) {
-    const int j = (i + 1) % segments;
-    faces.push_back({i, j, segments + j});
-    faces.push_back({i, segments + j, segments + i});
-  }
-  for (int i = 1; i + 1 < segments; ++i) {
-    faces.push_back({0, i + 1, i});                               // bottom, facing -z
-    faces.push_back({segments, segments + i, segments + i + 1});  // top, facing +z
-  }
-  mesh.F.resize(static_cast<int>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
-  build_connectivity(mesh);
-  return mesh;
-}
-
 double surface_area(const TriMesh& mesh) {
   double area = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) area += 0.5 * mesh.face_normal_unnormalized(f).norm();
@@ -143,7 +117,7 @@ INSTANTIATE_TEST_SUITE_P(Shared, IsotropicRemeshMeshes,
                          });
 
 TEST(IsotropicRemeshGenerated, FanCylinderLosesItsNeedles) {
-  const TriMesh mesh = make_fan_cylinder(48, 1, 3);
+  const TriMesh mesh = test::make_fan_cylinder(48, 1, 3);
   const std::vector<char> features = detect_feature_edges(mesh, {}, 40);
   EXPECT_GT(needle_area_share(mesh), 0.5);
   IsotropicRemeshOptions options;
@@ -157,7 +131,7 @@ TEST(IsotropicRemeshGenerated, FanCylinderLosesItsNeedles) {
 // same without features, or a smooth one, is not.
 TEST(IsotropicRemeshGenerated, WorkingMeshRemeshesNeedleCoveredComponentsWithFeatures) {
   Progress progress;
-  const TriMesh cylinder = make_fan_cylinder(48, 1, 3);
+  const TriMesh cylinder = test::make_fan_cylinder(48, 1, 3);
   const std::vector<char> rims = detect_feature_edges(cylinder, {}, 40);
   const WorkingMesh remeshed = make_working_mesh(cylinder, rims, 20000, 5000, progress);
   EXPECT_TRUE(remeshed.remeshed);

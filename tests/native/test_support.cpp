@@ -206,6 +206,37 @@ std::unique_ptr<Session> remeshed_session(const std::string& name, double target
   return session;
 }
 
+TriMesh make_fan_cylinder(int segments, double radius, double height) {
+  TriMesh mesh;
+  mesh.V.resize(2 * segments, 3);
+  for (int i = 0; i < segments; ++i) {
+    const double a = 2 * M_PI * i / segments;
+    mesh.V.row(i) << radius * std::cos(a), radius * std::sin(a), 0;
+    mesh.V.row(segments + i) << radius * std::cos(a), radius * std::sin(a), height;
+  }
+  std::vector<std::array<int, 3>> faces;
+  for (int i = 0; i < segments; ++i) {
+    const int j = (i + 1) % segments;
+    faces.push_back({i, j, segments + j});
+    faces.push_back({i, segments + j, segments + i});
+  }
+  for (int i = 1; i + 1 < segments; ++i) {
+    faces.push_back({0, i + 1, i});                               // bottom, facing -z
+    faces.push_back({segments, segments + i, segments + i + 1});  // top, facing +z
+  }
+  mesh.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
+  build_connectivity(mesh);
+  return mesh;
+}
+
+PolygonSoup polygon_soup(const TriMesh& mesh) {
+  PolygonSoup soup;
+  for (int v = 0; v < mesh.num_vertices(); ++v) soup.positions.push_back(mesh.position(v));
+  for (int f = 0; f < mesh.num_faces(); ++f) soup.add_face(mesh.F.row(f).data(), 3);
+  return soup;
+}
+
 PolygonSoup polygon_soup(const QuadMesh& quads) {
   PolygonSoup soup;
   for (int v = 0; v < quads.num_vertices(); ++v) soup.positions.push_back(quads.V.row(v).transpose());

@@ -62,6 +62,10 @@ std::unique_ptr<Session> remeshed_session(const std::string& name, double target
 
 // The quads as a polygon soup (for measure_polygon_mesh).
 PolygonSoup polygon_soup(const QuadMesh& quads);
+PolygonSoup polygon_soup(const TriMesh& mesh);
+// A closed cylinder as CAD exports it: each side a quad cut into two needles from cap to cap, each
+// cap a fan from one rim vertex (needles again). Its rims are feature curves. Connectivity built.
+TriMesh make_fan_cylinder(int segments, double radius, double height);
 
 // Irregular quad vertices (valence != 4 inside, != 3 on the boundary) not flagged vertex_singular.
 int irregular_vertices_off_singularities(const QuadMesh& quads);

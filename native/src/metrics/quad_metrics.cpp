@@ -233,29 +233,38 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
   if (nq == 0) m.min_scaled_jacobian = 0;
 
   if (options.hausdorff && nq > 0 && reference.num_faces() > 0) {
-    std::mt19937 rng(options.seed);
-    std::vector<Vec3> qv(quads.V.rows());
-    for (int v = 0; v < quads.V.rows(); ++v) qv[v] = quads.V.row(v).transpose();
-    std::vector<std::array<int, 3>> qt;
-    qt.reserve(2 * static_cast<size_t>(nq));
-    for (int q = 0; q < nq; ++q) {
-      qt.push_back({quads.Q(q, 0), quads.Q(q, 1), quads.Q(q, 2)});
-      qt.push_back({quads.Q(q, 0), quads.Q(q, 2), quads.Q(q, 3)});
-    }
-    std::vector<Vec3> rv(reference.num_vertices());
-    for (int v = 0; v < reference.num_vertices(); ++v) rv[v] = reference.position(v);
-    std::vector<std::array<int, 3>> rt(reference.num_faces());
-    for (int f = 0; f < reference.num_faces(); ++f) rt[f] = {reference.F(f, 0), reference.F(f, 1), reference.F(f, 2)};
-    const TriangleBvh quad_bvh(quads.V, qt);
     const double diagonal = reference.bounding_box_diagonal();
     const double scale = diagonal > 0 ? 1 / diagonal : 1;
-    m.hausdorff_quads_to_mesh =
-        scale * max_distance(sample_surface(qv, qt, options.hausdorff_samples, rng), reference_bvh, progress);
-    m.hausdorff_mesh_to_quads =
-        scale * max_distance(sample_surface(rv, rt, options.hausdorff_samples, rng), quad_bvh, progress);
+    const std::array<double, 2> d =
+        hausdorff_distances(quads, reference, reference_bvh, options.hausdorff_samples, options.seed, progress);
+    m.hausdorff_quads_to_mesh = scale * d[0];
+    m.hausdorff_mesh_to_quads = scale * d[1];
     m.hausdorff = std::max(m.hausdorff_quads_to_mesh, m.hausdorff_mesh_to_quads);
   }
   return m;
+}
+
+std::array<double, 2> hausdorff_distances(const QuadMesh& quads, const TriMesh& reference,
+                                          const TriangleBvh& reference_bvh, int samples, uint32_t seed,
+                                          Progress& progress) {
+  const int nq = quads.num_quads();
+  if (nq == 0 || reference.num_faces() == 0) return {0.0, 0.0};
+  std::mt19937 rng(seed);
+  std::vector<Vec3> qv(quads.V.rows());
+  for (int v = 0; v < quads.V.rows(); ++v) qv[v] = quads.V.row(v).transpose();
+  std::vector<std::array<int, 3>> qt;
+  qt.reserve(2 * static_cast<size_t>(nq));
+  for (int q = 0; q < nq; ++q) {
+    qt.push_back({quads.Q(q, 0), quads.Q(q, 1), quads.Q(q, 2)});
+    qt.push_back({quads.Q(q, 0), quads.Q(q, 2), quads.Q(q, 3)});
+  }
+  std::vector<Vec3> rv(reference.num_vertices());
+  for (int v = 0; v < reference.num_vertices(); ++v) rv[v] = reference.position(v);
+  std::vector<std::array<int, 3>> rt(reference.num_faces());
+  for (int f = 0; f < reference.num_faces(); ++f) rt[f] = {reference.F(f, 0), reference.F(f, 1), reference.F(f, 2)};
+  const TriangleBvh quad_bvh(quads.V, qt);
+  const double quads_to_mesh = max_distance(sample_surface(qv, qt, samples, rng), reference_bvh, progress);
+  return {quads_to_mesh, max_distance(sample_surface(rv, rt, samples, rng), quad_bvh, progress)};
 }
 
 void to_json(Json& j, const QuadMetrics& m) {

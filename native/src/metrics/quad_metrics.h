@@ -76,6 +76,12 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
 // Area-weighted random points on a triangle soup (count of them), plus every vertex.
 std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T, int count,
                                  std::mt19937& rng);
+// The sampled two-sided Hausdorff distance between the quads (each split into two triangles) and
+// `reference`, in model units: {quads to reference, reference to quads}. samples: random points per
+// direction, plus every vertex; the same seed gives the same figures.
+std::array<double, 2> hausdorff_distances(const QuadMesh& quads, const TriMesh& reference,
+                                          const TriangleBvh& reference_bvh, int samples, uint32_t seed,
+                                          Progress& progress);
 // Largest distance from the samples to the surface.
 double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target, Progress& progress);
 

@@ -270,6 +270,11 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
   options.field_frame_solve = false;
 }
 
+bool remesh_may_bring_quads_closer(const ComponentState& state, Job job) {
+  return job == Job::Remesh && !state.failure && state.quads.has_value() && !state.full_mesh &&
+         has_needles_across_features(state.mesh, state.feature_edges);
+}
+
 bool retry_on_isotropic_remesh(const ComponentState& state, Job job) {
   return job == Job::Remesh && state.failure && !state.full_mesh &&
          has_needles_across_features(state.mesh, state.feature_edges);

@@ -27,7 +27,8 @@
 //                                           seamless map then folds
 //   failed part    retry_on_isotropic_remesh   a remesh part with feature edges across needle
 //                                           triangles (a CAD tessellation) that failed on its own
-//                                           triangles: run again on an isotropic remesh of them
+//                                           triangles: run again on an isotropic remesh of them;
+//                  kMaxQuadDistanceInEdges  also one whose quads lie far off its surface
 //                  retry_without_cancelled_pairs   a remesh part that failed after its field
 //                                           cancelled close pairs: run again with the field without
 //                  quads_of_split_triangles a remesh part a stage failed on (StageFailed): its triangles,
@@ -97,6 +98,14 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
 // cancelled, its extracted quads had 2 non-manifold edges, and the split-triangle rescue made
 // 8 004 quads with 3 876 irregular vertices).
 bool retry_without_cancelled_pairs(const ComponentState& state);
+// A remesh part quadded on its own needle triangles (as below: features, needles over
+// kRemeshAboveNeedleShare) whose quads lie farther than this many target quad edges from its
+// surface, either way, is also run again on an isotropic remesh, and takes those quads when they
+// lie closer: a map on needles can be regular and still cut across the part (a CAD-style cylinder
+// of needle fans at 2 000 quads: 8.6 % of the diagonal, 3 quad edges, on its own triangles; 0.12 %
+// on a remesh).
+constexpr double kMaxQuadDistanceInEdges = 1;
+bool remesh_may_bring_quads_closer(const ComponentState& state, Job job);
 // A remesh part that failed on its own triangles, which has feature edges and needles over
 // kRemeshAboveNeedleShare of its area (intake/working_mesh.h), is first run again on an isotropic
 // remesh of itself, before every other rescue. Not before it fails: parts whose map holds on their

@@ -1,6 +1,7 @@
 #include "pipeline/session.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -31,6 +32,13 @@ std::vector<int> intake_faces_under_quad_centres(const QuadMesh& part, const Com
       triangles_under_centres<4>(part.V, part.Q, TriangleBvh(full ? *state.full_mesh : state.mesh));
   for (int& f : faces) f = f >= 0 && f < static_cast<int>(face_map.size()) ? face_map[f] : -1;
   return faces;
+}
+
+// The larger of the two sampled Hausdorff distances between a part's quads and its surface.
+double quads_distance(const QuadMesh& quads, const TriMesh& surface, Progress& progress) {
+  constexpr int kSamples = 20000;
+  const std::array<double, 2> d = hausdorff_distances(quads, surface, TriangleBvh(surface), kSamples, 1, progress);
+  return std::max(d[0], d[1]);
 }
 
 }  // namespace
@@ -442,6 +450,25 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
   throw_if_every_component_failed();
 }
 
+void Session::remesh_parts_off_their_surface(Job job, Progress& progress) {
+  const double limit = kMaxQuadDistanceInEdges * target_edge_length();
+  const std::vector<double> targets = rescue_quad_targets();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (!remesh_may_bring_quads_closer(state, job)) continue;
+    const double distance = quads_distance(state.quads->extraction.quads, state.mesh, progress);
+    if (distance <= limit) continue;
+    ComponentState own = state;
+    state.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                "its quads lie up to " + std::to_string(distance) +
+                                    " off its surface (more than a quad edge) on its needle triangles"};
+    if (!quad_on_isotropic_remesh(state, static_cast<int>(c), targets[c], job, progress) ||
+        quads_distance(state.quads->extraction.quads, *state.full_mesh, progress) >= distance)
+      state = std::move(own);
+  }
+  report_["working_mesh"] = working_mesh_report(components_);
+}
+
 void Session::rescue_flipped_components(Progress& progress) {
   Timer timer;
   const std::vector<double> targets = rescue_quad_targets();
@@ -540,6 +567,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
     report_["extraction"] = extraction_report(components_, report_["igm"]);
     if (rescues_failed_components(job)) {
       rescue_failed_components(job, progress);
+      remesh_parts_off_their_surface(job, progress);
       rescue_flipped_components(progress);
       mark_fields_without_cancelled_pairs();
     }

@@ -117,6 +117,9 @@ class Session {
   // The component's quads at the density asked with the field without cancelled close pairs;
   // false if a stage failed.
   bool quad_without_cancelled_pairs(ComponentState& state, double target_quads, Job job, Progress& progress);
+  // Parts on needle triangles whose quads lie far off their surface (policy.h:
+  // remesh_may_bring_quads_closer) take the quads of an isotropic remesh where those lie closer.
+  void remesh_parts_off_their_surface(Job job, Progress& progress);
   // Component c's quads on an isotropic remesh of its triangles (policy.h: retry_on_isotropic_remesh);
   // false (state unchanged) if the remesh does not apply or a stage failed.
   bool quad_on_isotropic_remesh(ComponentState& state, int c, double target_quads, Job job, Progress& progress);
