@@ -1,8 +1,8 @@
 // Feature-preserving isotropic remeshing (Botsch & Kobbelt 2004, "A remeshing approach to
-// multiresolution modeling"): the working mesh of a component whose own triangles are too poor
-// for the seamless map. CAD tessellations cover a flat face with a fan of needles that reach
-// across it; the map cannot stay flip-free on them at any density (featuretype: 15 flipped
-// triangles after 14 repair rounds).
+// multiresolution modeling"): the working mesh of a part whose own triangles are too poor for the
+// seamless map (pipeline/policy.h says when). CAD tessellations cover a flat face with a fan of
+// needles that reach across it; the map may fold on them (featuretype with sharp edges: 15 flipped
+// triangles after 14 repair rounds) or cut across the part.
 //
 // Each iteration splits edges longer than 4/3 of the target length at their midpoints, collapses
 // edges shorter than 4/5 of it, flips edges toward valence 6 (4 on the boundary) and moves every
@@ -12,8 +12,8 @@
 // the chord stays within a twentieth of the target length of the removed vertex, and never
 // flipped; their vertices do not move, and the ends and sharp turns of lines never go. A collapse
 // keeps the link condition, so the topology stays; a change that would turn a face by more than
-// 30 degrees or leave it degenerate is not made. Sequential, in sorted order: the same input gives
-// the same mesh on every run.
+// 30 degrees or leave it degenerate is not made. A pass of Delaunay flips ends the remesh.
+// Sequential, in sorted order: the same input gives the same mesh on every run.
 #pragma once
 #include <optional>
 #include <vector>
