@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -21,9 +20,7 @@ struct FieldCase {
 };
 
 inline std::string case_name(const ::testing::TestParamInfo<FieldCase>& info) {
-  std::string name = info.param.file;
-  for (char& c : name)
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  std::string name = test::identifier(info.param.file);
   if (info.param.sharp_angle_deg >= 0) name += "_sharp" + std::to_string(static_cast<int>(info.param.sharp_angle_deg));
   return name;
 }

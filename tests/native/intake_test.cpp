@@ -102,12 +102,7 @@ TEST_P(IntakeOverMeshes, ClassifiesOrRefusesClearly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedMeshes, IntakeOverMeshes, ::testing::ValuesIn(test::all_mesh_files()),
-                         [](const auto& info) {
-                           std::string n = info.param;
-                           for (char& ch : n)
-                             if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                           return n;
-                         });
+                         [](const auto& info) { return test::identifier(info.param); });
 
 // Triangles of the file that are degenerate by IntakeOptions' definition (area <= zero_area * diag^2,
 // or height below flatness times the longest edge), counted here from the raw soup.

@@ -98,12 +98,8 @@ TEST_P(ReaderOracle, SameSoupAsOpenMesh) {
   EXPECT_LT(worst, 1e-6) << name;  // OpenMesh reads some formats in single precision
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedMeshes, ReaderOracle, ::testing::ValuesIn(test::all_mesh_files()), [](const auto& info) {
-  std::string n = info.param;
-  for (char& ch : n)
-    if (!isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  return n;
-});
+INSTANTIATE_TEST_SUITE_P(SharedMeshes, ReaderOracle, ::testing::ValuesIn(test::all_mesh_files()),
+                         [](const auto& info) { return test::identifier(info.param); });
 
 }  // namespace
 }  // namespace qgp

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -228,6 +229,12 @@ TriMesh make_fan_cylinder(int segments, double radius, double height) {
   for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
   build_connectivity(mesh);
   return mesh;
+}
+
+std::string identifier(std::string text) {
+  for (char& c : text)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return text;
 }
 
 PolygonSoup polygon_soup(const TriMesh& mesh) {

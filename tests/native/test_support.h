@@ -61,6 +61,8 @@ std::string run_until_stage(Session& session, const std::string& stage);
 std::unique_ptr<Session> remeshed_session(const std::string& name, double target, double sharp_angle = -1);
 
 // The quads as a polygon soup (for measure_polygon_mesh).
+// `text` with every character but letters and digits replaced by '_' (a GoogleTest parameter name).
+std::string identifier(std::string text);
 PolygonSoup polygon_soup(const QuadMesh& quads);
 PolygonSoup polygon_soup(const TriMesh& mesh);
 // A closed cylinder as CAD exports it: each side a quad cut into two needles from cap to cap, each

@@ -123,12 +123,7 @@ TEST_P(WorkingMeshOverMeshes, IsTheInputBelowTheBudget) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Shared, WorkingMeshOverMeshes, ::testing::ValuesIn(test::manifold_mesh_files()),
-                         [](const auto& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (!isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return n;
-                         });
+                         [](const auto& info) { return test::identifier(info.param); });
 
 // A dense, noisy sculpt-like torus (200 x 400 quads, radial noise of a fifth of an edge): the
 // decimation reaches its budget, keeps the torus's topology, turns no face against the surface

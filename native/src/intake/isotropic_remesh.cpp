@@ -67,12 +67,14 @@ class Remesher {
     const int h = mesh_.edge_halfedge[e];
     return mesh_.opposite[h] < 0 || lines_.count(edge_key(mesh_.from(h), mesh_.to(h)));
   }
-  std::vector<int> neighbors(int v) const;
-  std::vector<int> line_neighbors(int v) const;
+  // The vertices v shares an edge with (lines_only: a line or boundary edge).
+  std::vector<int> neighbors(int v, bool lines_only = false) const;
+  // A face's normal `after` a change is not degenerate and within kMaxFaceTurnDeg of `before`.
+  bool turns_little(const Vec3& before, const Vec3& after) const;
   Vec3 face_normal(const std::array<int, 3>& t) const {
     return triangle_normal(positions_[t[0]], positions_[t[1]], positions_[t[2]]);
   }
-  // The face's normal when `v` is at `p`, and whether it turned little from its current one.
+  // Whether face t turns little (turns_little) when its vertex v moves to p.
   bool turns_little_if_moved(const std::array<int, 3>& t, int v, const Vec3& p) const;
 
   int split_long_edges(double max_length);
@@ -124,7 +126,7 @@ void Remesher::mark_corners(const std::vector<char>& features) {
   const double min_straight_cos = std::cos(kCornerTurnDeg * M_PI / 180);
   for (int v = 0; v < input_.num_vertices(); ++v) {
     if (line_degree_[v] == 0) continue;
-    const std::vector<int> ends = line_neighbors(v);
+    const std::vector<int> ends = neighbors(v, true);
     if (ends.size() != 2 || feature_degree[v] == 1) {
       corner_[v] = 1;
       continue;
@@ -149,23 +151,21 @@ void Remesher::rebuild() {
     }
 }
 
-std::vector<int> Remesher::neighbors(int v) const {
+std::vector<int> Remesher::neighbors(int v, bool lines_only) const {
   const std::vector<int> out = outgoing_halfedges(mesh_, v);
   std::vector<int> result;
-  for (int h : out) result.push_back(mesh_.to(h));
+  for (int h : out)
+    if (!lines_only || is_line(mesh_.edge_of[h])) result.push_back(mesh_.to(h));
+  // On the boundary, the incoming boundary edge's start (a line) is not the end of an outgoing one.
   if (!out.empty() && mesh_.opposite[TriMesh::prev(out.back())] < 0)
     result.push_back(mesh_.from(TriMesh::prev(out.back())));
   return result;
 }
 
-std::vector<int> Remesher::line_neighbors(int v) const {
-  const std::vector<int> out = outgoing_halfedges(mesh_, v);
-  std::vector<int> result;
-  for (int h : out)
-    if (is_line(mesh_.edge_of[h])) result.push_back(mesh_.to(h));
-  if (!out.empty() && mesh_.opposite[TriMesh::prev(out.back())] < 0)
-    result.push_back(mesh_.from(TriMesh::prev(out.back())));
-  return result;
+bool Remesher::turns_little(const Vec3& before, const Vec3& after) const {
+  const double la = after.norm(), lb = before.norm();
+  if (!(la > kMinAreaShare * length_ * length_) || !(lb > 0)) return false;
+  return after.dot(before) >= std::cos(kMaxFaceTurnDeg * M_PI / 180) * la * lb;
 }
 
 bool Remesher::turns_little_if_moved(const std::array<int, 3>& t, int v, const Vec3& p) const {
@@ -173,10 +173,7 @@ bool Remesher::turns_little_if_moved(const std::array<int, 3>& t, int v, const V
   const Vec3 before = triangle_normal(corners[0], corners[1], corners[2]);
   for (int k = 0; k < 3; ++k)
     if (t[k] == v) corners[k] = p;
-  const Vec3 after = triangle_normal(corners[0], corners[1], corners[2]);
-  const double la = after.norm(), lb = before.norm();
-  if (!(la > kMinAreaShare * length_ * length_) || !(lb > 0)) return false;
-  return after.dot(before) >= std::cos(kMaxFaceTurnDeg * M_PI / 180) * la * lb;
+  return turns_little(before, triangle_normal(corners[0], corners[1], corners[2]));
 }
 
 int Remesher::split_long_edges(double max_length) {
@@ -253,7 +250,7 @@ bool Remesher::can_remove(int a, int b, int e, double max_length) const {
   if (corner_[a]) return false;
   if (line_degree_[a] > 0) {
     if (!is_line(e)) return false;
-    for (int c : line_neighbors(a))
+    for (int c : neighbors(a, true))
       if (c != b && distance_to_segment(positions_[a], positions_[b], positions_[c]) > kChordShare * length_)
         return false;
   }
@@ -332,13 +329,7 @@ int Remesher::flip_edges(FlipRule rule) {
     if (std::find(around_c.begin(), around_c.end(), d) != around_c.end()) continue;
     const std::array<int, 3> first{a, d, c}, second{d, b, c};
     const Vec3 old_normal = face_normal(faces_[h / 3]).normalized() + face_normal(faces_[o / 3]).normalized();
-    bool flat_enough = true;
-    for (const std::array<int, 3>& t : {first, second}) {
-      const Vec3 n = face_normal(t);
-      flat_enough = flat_enough && n.norm() > kMinAreaShare * length_ * length_ &&
-                    n.dot(old_normal) >= std::cos(kMaxFaceTurnDeg * M_PI / 180) * n.norm() * old_normal.norm();
-    }
-    if (!flat_enough) continue;
+    if (!turns_little(old_normal, face_normal(first)) || !turns_little(old_normal, face_normal(second))) continue;
     faces_[h / 3] = first;
     faces_[o / 3] = second;
     touched[h / 3] = touched[o / 3] = 1;

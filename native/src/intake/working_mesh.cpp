@@ -57,7 +57,7 @@ int remesh_face_budget(double target_quads, double area_share) {
 
 WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges, int max_faces,
                               int remesh_faces, Progress& progress) {
-  if (remesh_faces > 0 && has_needles_across_features(mesh, feature_edges))
+  if (remesh_faces > 0)
     if (std::optional<WorkingMesh> remeshed = remeshed_working_mesh(mesh, feature_edges, remesh_faces))
       return *remeshed;
   auto keep_input = [&] {

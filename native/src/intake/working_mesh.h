@@ -45,8 +45,8 @@ constexpr double kRemeshAboveNeedleShare = 0.1;
 bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges);
 
 // mesh: one connected, oriented, manifold component (connectivity built); feature_edges: #E.
-// With remesh_faces > 0, a component that has_needles_across_features is remeshed to about
-// remesh_faces equilateral triangles. Otherwise decimates to max_faces when mesh has more than
+// With remesh_faces > 0 (pipeline/policy.h decides when: has_needles_across_features), the component
+// is remeshed to about remesh_faces equilateral triangles. Otherwise decimates to max_faces when mesh has more than
 // kDecimateAboveBudget * max_faces faces, as far as the locks and the quality checks allow (the
 // budget may stay out of reach); otherwise, or when no collapse is possible, returns a copy.
 WorkingMesh make_working_mesh(const TriMesh& mesh, const std::vector<char>& feature_edges, int max_faces,

@@ -135,7 +135,6 @@ struct ComponentState {
   // (intake/working_mesh.h); the quads are projected back onto the component itself, kept here.
   std::optional<TriMesh> full_mesh;
   bool remeshed = false;                 // full_mesh was remeshed, not decimated
-  int input_feature_edges = 0;           // feature edges of the component itself (not of a working mesh)
   std::vector<int> full_face_map;        // full_mesh face -> intake mesh face
   std::vector<char> full_feature_edges;  // #E of full_mesh
   int working_face_budget = 0;           // the face budget `mesh` was made for (0: no limit)

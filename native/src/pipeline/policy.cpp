@@ -270,14 +270,21 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
   options.field_frame_solve = false;
 }
 
+namespace {
+
+// A remesh part on its own triangles (no working mesh) with feature edges across needles.
+bool on_needles_across_features(const ComponentState& state, Job job) {
+  return job == Job::Remesh && !state.full_mesh && has_needles_across_features(state.mesh, state.feature_edges);
+}
+
+}  // namespace
+
 bool remesh_may_bring_quads_closer(const ComponentState& state, Job job) {
-  return job == Job::Remesh && !state.failure && state.quads.has_value() && !state.full_mesh &&
-         has_needles_across_features(state.mesh, state.feature_edges);
+  return !state.failure && state.quads.has_value() && on_needles_across_features(state, job);
 }
 
 bool retry_on_isotropic_remesh(const ComponentState& state, Job job) {
-  return job == Job::Remesh && state.failure && !state.full_mesh &&
-         has_needles_across_features(state.mesh, state.feature_edges);
+  return state.failure && on_needles_across_features(state, job);
 }
 
 bool retry_without_cancelled_pairs(const ComponentState& state) {

@@ -53,7 +53,8 @@ void to_json(Json& j, const QuadChoice& choice) {
 Json working_mesh_report(const std::vector<ComponentState>& components) {
   int decimated = 0, remeshed = 0, input_faces = 0, working_faces = 0, feature_edges = 0;
   for (const ComponentState& state : components) {
-    feature_edges += state.input_feature_edges;
+    const std::vector<char>& own = state.full_mesh ? state.full_feature_edges : state.feature_edges;
+    feature_edges += static_cast<int>(std::count(own.begin(), own.end(), 1));  // of the component itself
     decimated += state.full_mesh.has_value() && !state.remeshed;
     remeshed += state.remeshed;
     input_faces += state.full_mesh ? state.full_mesh->num_faces() : state.mesh.num_faces();

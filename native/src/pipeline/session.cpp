@@ -247,7 +247,6 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
     if (features[intake_->mesh.edge_of[global_h]]) caller[state.mesh.edge_of[h]] = 1;
   }
   state.feature_edges = detect_feature_edges(state.mesh, caller, options_.sharp_angle_deg);
-  state.input_feature_edges = static_cast<int>(std::count(state.feature_edges.begin(), state.feature_edges.end(), 1));
   if (job == Job::Remesh) {
     const double edge_length = target_edge_length(), area = component_area(c);
     state.working_face_budget = component_face_budget(c, edge_length);
@@ -445,7 +444,6 @@ void Session::rescue_failed_components(Job job, Progress& progress) {
     if (finer_density_may_help(state.failure->stage) && quad_at_finer_density(state, target, most, job, progress))
       state.split_quads.reset();
   }
-  report_["working_mesh"] = working_mesh_report(components_);  // parts rescued on a remesh
   report_["timings_s"]["rescue"] = timer.seconds();
   throw_if_every_component_failed();
 }
@@ -466,7 +464,6 @@ void Session::remesh_parts_off_their_surface(Job job, Progress& progress) {
         quads_distance(state.quads->extraction.quads, *state.full_mesh, progress) >= distance)
       state = std::move(own);
   }
-  report_["working_mesh"] = working_mesh_report(components_);
 }
 
 void Session::rescue_flipped_components(Progress& progress) {
@@ -570,6 +567,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
       remesh_parts_off_their_surface(job, progress);
       rescue_flipped_components(progress);
       mark_fields_without_cancelled_pairs();
+      report_["working_mesh"] = working_mesh_report(components_);  // with the parts rescued on a remesh
     }
   }
   if (!half_) collect_grid_uvs();  // the map of the input's own triangles (a half has other triangles)
