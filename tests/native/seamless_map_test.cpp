@@ -1,9 +1,11 @@
 // Seamless map (stage 1c): exact elimination, field-guided energy, regularity repair with Ipopt.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <queue>
 #include <random>
@@ -584,6 +586,84 @@ TEST(ParametrizationProblem, FieldFrameSolveCanBeLeftToTheCaller) {
   EXPECT_EQ(with_global.stats.field_frame_solves, 1);
   EXPECT_EQ(local_only.stats.field_frame_solves, 0);
   EXPECT_LT(local_only.stats.repair_rounds, with_global.stats.repair_rounds);
+}
+
+TEST(ParametrizationProblem, CallerFinishesARepairAtAPlateau) {
+  // caller_finishes is asked once per plateau of the bad faces (the first round that leaves the
+  // best pose's count no lower), with that best pose: declining lets the repair run to its other
+  // bounds; accepting ends it there (the field-frame solve and later rounds skipped) and the
+  // solution is the pose the caller accepted.
+  CubeProblem p;
+  pin_clockwise_faces(p);
+  p.problem.set_cone_angles(cube_cones(p.cube));
+  ParametrizationSolveOptions plain;
+  const ParametrizationSolution unbounded = p.problem.solve(plain, p.progress);
+
+  ParametrizationSolveOptions declining = plain;
+  int asked = 0;
+  declining.caller_finishes = [&](const Parametrization& pose) {
+    EXPECT_EQ(pose.uv.rows(), 3 * p.cube.mesh.num_faces());
+    ++asked;
+    return false;
+  };
+  const ParametrizationSolution declined = p.problem.solve(declining, p.progress);
+  EXPECT_FALSE(declined.stats.finished_by_caller);
+  EXPECT_EQ(declined.stats.repair_rounds, unbounded.stats.repair_rounds);
+  EXPECT_EQ(declined.stats.bad_after_round, unbounded.stats.bad_after_round);
+  EXPECT_GE(asked, 1);
+  // Never more often than there are rounds without fewer bad faces than the best before them.
+  int plateau_rounds = 0, best = std::numeric_limits<int>::max();
+  for (int bad : unbounded.stats.bad_after_round) {
+    plateau_rounds += bad >= best;
+    best = std::min(best, bad);
+  }
+  EXPECT_LE(asked, plateau_rounds);
+
+  ParametrizationSolveOptions accepting = plain;
+  Parametrization accepted;
+  accepting.caller_finishes = [&](const Parametrization& pose) {
+    accepted = pose;
+    return true;
+  };
+  const ParametrizationSolution finished = p.problem.solve(accepting, p.progress);
+  EXPECT_TRUE(finished.stats.finished_by_caller);
+  EXPECT_LT(finished.stats.repair_rounds, unbounded.stats.repair_rounds);
+  EXPECT_EQ(finished.stats.field_frame_solves, 0);
+  ASSERT_EQ(accepted.uv.rows(), finished.param.uv.rows());
+  EXPECT_EQ((accepted.uv - finished.param.uv).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(ParametrizationProblem, AFutileRepairIsSkipped) {
+  // repair_is_futile sees the equality-only optimum (with its folds) once; true leaves it unrepaired,
+  // false changes nothing.
+  CubeProblem p;
+  pin_clockwise_faces(p);
+  ParametrizationSolveOptions plain;
+  const ParametrizationSolution repaired = p.problem.solve(plain, p.progress);
+  for (const bool futile : {false, true}) {
+    SCOPED_TRACE(futile);
+    ParametrizationSolveOptions asking = plain;
+    int asked = 0;
+    int flipped_seen = 0;
+    asking.repair_is_futile = [&](const Parametrization& pose) {
+      ++asked;
+      for (int f = 0; f < p.cube.mesh.num_faces(); ++f) {
+        const Vec2 a = pose.uv.row(3 * f), b = pose.uv.row(3 * f + 1), c = pose.uv.row(3 * f + 2);
+        flipped_seen += (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0;
+      }
+      return futile;
+    };
+    const ParametrizationSolution s = p.problem.solve(asking, p.progress);
+    EXPECT_EQ(asked, 1);
+    EXPECT_GE(flipped_seen, 3);  // the pinned faces at least
+    EXPECT_EQ(s.stats.futile_repair_skipped, futile);
+    if (futile) {
+      EXPECT_EQ(s.stats.repair_rounds, 0);
+      EXPECT_EQ(s.stats.flipped, s.stats.flipped_initial);
+    } else {
+      EXPECT_EQ(s.stats.bad_after_round, repaired.stats.bad_after_round);
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -295,6 +295,47 @@ TEST(SessionPipeline, AQuadJobDoesNotRepairAMapThatCannotBeRegular) {
   expect_valid_output("stanford-bunny.obj", session, -1);
 }
 
+// A quad job's integer-grid map is not repaired where its integer values break the quantization's
+// path rows: it cannot cover the quads asked, so the quads come from the T-mesh layout whatever
+// the repair does (block with edges over 60 degrees at 2 000 quads: rows off by 149 quad units,
+// 10 repair rounds and 12 s for a map the layout replaced; the same quads now in about 1 s).
+TEST(SessionPipeline, AQuadJobDoesNotRepairAMapOffItsQuantization) {
+  Session session(read_mesh_file(test::mesh_path("block.obj")));
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 2000, 60));
+  const Json& report = session.report();
+  ASSERT_EQ(report["igm"]["components"].size(), 1u);
+  const Json& igm = report["igm"]["components"][0];
+  EXPECT_TRUE(igm["repair_skipped"].get<bool>());
+  EXPECT_GT(igm["max_constraint_violation"].get<double>(), kMaxRowViolation);
+  EXPECT_TRUE(igm["repair_bad_faces"].empty());
+  EXPECT_NE(igm["parametric_area"], report["quantization"]["components"][0]["quads_expected"]);
+  EXPECT_EQ(report["extraction"]["layout_components"], 1);
+  expect_valid_output("block.obj", session, 60);
+}
+
+// A quad job's integer-grid map repair ends at the first plateau whose pose the untangle makes
+// regular (policy.h kMaxShareToUntangle): stanford-bunny at 8 000 quads stalled at 4 and 3 bad
+// triangles, then crept to 1 over six more rounds of growing regions (about 4 s), and the untangle
+// then regularized it. The map ends regular and the quads come from it.
+TEST(SessionPipeline, AQuadJobLeavesAStalledRepairToTheUntangle) {
+  Session session(read_mesh_file(test::mesh_path("stanford-bunny.obj")));
+  ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 8000));
+  const Json& report = session.report();
+  ASSERT_EQ(report["igm"]["components"].size(), 1u);
+  const Json& igm = report["igm"]["components"][0];
+  EXPECT_TRUE(igm["repair_left_to_untangle"].get<bool>());
+  const std::vector<int> bad = igm["repair_bad_faces"].get<std::vector<int>>();
+  ASSERT_GE(bad.size(), 2u);
+  EXPECT_GT(bad.back(), 0);                                              // it stopped with bad triangles left,
+  EXPECT_GE(bad.back(), *std::min_element(bad.begin(), bad.end() - 1));  // at a plateau,
+  EXPECT_GT(igm["untangled_vertices"].get<int>(), 0);                    // which the untangle removed
+  EXPECT_EQ(igm["flipped_triangles"], 0);
+  EXPECT_EQ(igm["degenerate_triangles"], 0);
+  EXPECT_EQ(igm["winding_defects"], 0);
+  EXPECT_EQ(report["extraction"]["layout_components"], 0);
+  expect_valid_output("stanford-bunny.obj", session, -1);
+}
+
 // A density whose edge length is more than kMaxSeamlessRescale times the seamless map's solves the
 // map again, and the cross field too (its close singularity pairs depend on the edge length,
 // policy.h kCancelPairsWithin): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at

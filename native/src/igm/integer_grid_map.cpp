@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/sanitize_isolines.h"
 #include "core/timer.h"
+#include "igm/untangle_map.h"
 #include "quantization/round_quantization.h"
 #include "seamless_map/parametrization_problem.h"
 
@@ -544,20 +545,35 @@ ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized
   solve_options_.reference = after_relinearized_penalty ? &pose_ : &seamless_pose_;
   solve_options_.progress_begin = begin;
   solve_options_.progress_end = end;
+  if (options_.finish_by_untangle_up_to_share > 0)
+    solve_options_.caller_finishes = [this](const Parametrization& pose) { return untangles_to_regular(pose); };
+  if (options_.skip_repair_off_the_quantization)
+    solve_options_.repair_is_futile = [this](const Parametrization& pose) {
+      return row_violation(pose) > kMaxRowViolation;
+    };
   ParametrizationSolution solution = problem_.solve(solve_options_, progress_);
+  solve_options_.caller_finishes = nullptr;
+  solve_options_.repair_is_futile = nullptr;
   count_solves(solution);
   stats_.flipped_initial = solution.stats.flipped_initial;
   stats_.forced_degenerate = solution.stats.forced_degenerate;
   stats_.faces = mesh_.num_faces();
   stats_.repair_bad_faces = solution.stats.bad_after_round;
   stats_.repair_seconds = solution.stats.seconds_of_round;
-  stats_.max_constraint_violation = 0;
+  stats_.repair_left_to_untangle = solution.stats.finished_by_caller;
+  stats_.repair_skipped = solution.stats.futile_repair_skipped;
+  stats_.max_constraint_violation = row_violation(solution.param);
+  return solution;
+}
+
+double IntegerGridMapSolver::row_violation(const Parametrization& map) const {
+  double worst = 0;
   for (const IgmRow& r : rows_) {
     double value = -r.rhs;
-    for (const CornerTerm& t : r.terms) value += t.coeff * solution.param.uv(t.corner, t.axis);
-    stats_.max_constraint_violation = std::max(stats_.max_constraint_violation, std::abs(value));
+    for (const CornerTerm& t : r.terms) value += t.coeff * map.uv(t.corner, t.axis);
+    worst = std::max(worst, std::abs(value));
   }
-  return solution;
+  return worst;
 }
 
 ParametrizationSolution IntegerGridMapSolver::solve_global(bool relinearized_penalty, double begin, double end) {
@@ -633,6 +649,22 @@ IntegerGridMap IntegerGridMapSolver::round_exactly(const Parametrization& solved
   stats_.winding_defects = count_exact_winding_defects(mesh_, result.param, cones_);
   stats_.seconds_sanitize += sanitize_timer.seconds();
   return result;
+}
+
+bool IntegerGridMapSolver::untangles_to_regular(const Parametrization& pose) {
+  Timer timer;
+  set_snapping(snap_vertices_, isolines_);  // as solve() sets it after this hard solve
+  ExactParametrization exact = sanitize_with_isolines(mesh_, pose, isolines_, sanitize_).param;
+  int flipped = 0, degenerate = 0;
+  count_exact_irregular(exact, &flipped, &degenerate);
+  bool regular = flipped + degenerate <= options_.finish_by_untangle_up_to_share * mesh_.num_faces();
+  if (regular && flipped + degenerate > 0) {
+    const MapUntangleStats u = untangle_map(mesh_, snap_vertices_, isolines_, exact, progress_);
+    regular = u.flipped_after + u.degenerate_after == 0;
+  }
+  regular = regular && count_exact_winding_defects(mesh_, exact, cones_) == 0;
+  stats_.seconds_sanitize += timer.seconds();
+  return regular;
 }
 
 IntegerGridMap IntegerGridMapSolver::solve(IgmAttempt attempt, double progress_begin, double progress_end) {

@@ -46,7 +46,18 @@ struct IgmOptions {
   int fraction_bits = 20;           // of the exact result
   // No repair where the integer values make triangles degenerate (see ParametrizationSolveOptions).
   bool skip_repair_if_forced = false;
+  // > 0: the hard solve's repair ends at the first round of a plateau (see
+  // ParametrizationSolveOptions::caller_finishes) whose pose, rounded exactly, has at most this share
+  // of its triangles flipped or degenerate and is regular once untangled (untangle_map, as the caller
+  // then untangles it).
+  double finish_by_untangle_up_to_share = 0;
+  // No repair when the hard solve's equality-only optimum breaks the rows of C z = b by more than
+  // kMaxRowViolation: the integer values rounded from the penalty phase then contradict the
+  // quantization, the map's area is not the quad count, and no repair changes that.
+  bool skip_repair_off_the_quantization = false;
 };
+// Quad units; a map that meets its rows does so to rounding (about 1e-12).
+constexpr double kMaxRowViolation = 1e-3;
 
 // What one solve of the integer-grid map does (paper §7.1).
 enum class IgmAttempt {
@@ -90,6 +101,10 @@ struct IgmStats {
   int faces = 0;                             // triangles of the component
   std::vector<int> repair_bad_faces;         // the hard solve's bad faces after each repair round
   std::vector<double> repair_seconds;        // and the time of each round
+  bool repair_left_to_untangle = false;      // it ended at a plateau the untangle makes regular
+                                             // (IgmOptions::finish_by_untangle_up_to_share)
+  bool repair_skipped = false;               // the map was off its quantization (IgmOptions::
+                                             // skip_repair_off_the_quantization)
   IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
   bool fallback_used = false;                // made by the all-faces attempt
   std::string path;                          // the policy's account of the attempts (pipeline/policy.h)
@@ -164,10 +179,15 @@ class IntegerGridMapSolver {
   void count_solves(const ParametrizationSolution& solution);
   // What the exact rounding snaps: these vertices, and these edges' corners on their isoline axis.
   void set_snapping(const std::vector<char>& snap_vertices, const std::vector<IsolineConstraint>& isolines);
+  // Largest |C z - b| of the path rows in `map`.
+  double row_violation(const Parametrization& map) const;
   // Largest distance from an integer of what the exact rounding snaps.
   double integer_residual(const Parametrization& map) const;
   // The exact map of `solved` (snapped, sanitized) and its flipped / degenerate / wound counts.
   IntegerGridMap round_exactly(const Parametrization& solved);
+  // True when `pose` rounded exactly has at most options_.finish_by_untangle_up_to_share of its
+  // triangles flipped or degenerate and none of them, nor a wound one-ring, once untangled.
+  bool untangles_to_regular(const Parametrization& pose);
 
   const TriMesh& mesh_;
   const CrossField& field_;
@@ -206,6 +226,7 @@ QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, forced_degene
                 fallback_used, penalty_iterations, seconds, path, penalty_integer_residual, constraints,
                 max_constraint_violation, unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations,
                 qp_by_ipopt, seconds_solve, seconds_sanitize, flipped_before_untangle, degenerate_before_untangle,
-                untangled_vertices, winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds, attempts)
+                untangled_vertices, winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds,
+                repair_left_to_untangle, repair_skipped, attempts)
 
 }  // namespace qgp

@@ -605,6 +605,8 @@ class ParametrizationProblem::Solver {
 
   // Whether the equality-only optimum needs the regularity repair.
   bool needs_repair(const Census& initial) const;
+  // options_.repair_is_futile says so of the equality-only optimum.
+  bool repair_is_futile();
   // The repair rounds (local, global in the field's frame, local again), then re-linearization.
   void repair();
   // One global solve in the field's frame; true when local repair rounds should follow.
@@ -620,6 +622,10 @@ class ParametrizationProblem::Solver {
   bool stagnates(int round, const RepairTrack& track) const;
   // options_.halving_rounds > 0 and the bad faces have not halved over that many rounds.
   bool stops_halving() const;
+  // `round` begins a plateau of the bad faces and options_.caller_finishes takes the best pose.
+  bool caller_finishes(int round, const RepairTrack& track);
+  // The map of free variables x.
+  Parametrization pose(const Eigen::VectorXd& x) const;
   // Constrains faces that went bad outside the constrained set; true when `next` is rejected.
   bool reject_escaped(const Census& next);
   // Faces still bad get wider rings; the region and the constrained set grow accordingly.
@@ -722,7 +728,7 @@ void ParametrizationProblem::Solver::run() {
   current_ = census(z_);
   record_initial_stats();
   find_isoline_rotations();
-  if (needs_repair(current_)) repair();
+  if (needs_repair(current_) && !repair_is_futile()) repair();
   report(1.0);
   write_output();
 }
@@ -799,12 +805,18 @@ void ParametrizationProblem::Solver::find_isoline_rotations() {
     if (r.squaredNorm() > 0) r.normalize();
 }
 
-void ParametrizationProblem::Solver::write_output() {
-  Parametrization& p = out_.param;
+Parametrization ParametrizationProblem::Solver::pose(const Eigen::VectorXd& x) const {
+  Parametrization p;
   p.uv.resize(nc_, 2);
-  for (int c = 0; c < nc_; ++c) p.uv.row(c) = ev_.corner(z_, c).transpose();
+  for (int c = 0; c < nc_; ++c) p.uv.row(c) = ev_.corner(x, c).transpose();
   p.rotation = problem_.rotation_;
   p.is_cut = problem_.is_cut_;
+  return p;
+}
+
+void ParametrizationProblem::Solver::write_output() {
+  out_.param = pose(z_);
+  const Parametrization& p = out_.param;
   st_.flipped = current_.flipped;
   st_.degenerate = current_.degenerate;
   st_.winding_defects = problem_.winding_defects(p);
@@ -940,6 +952,11 @@ bool ParametrizationProblem::Solver::needs_repair(const Census& initial) const {
          (options_.regularity == RegularityMode::AllFaces || initial.bad() > 0);
 }
 
+bool ParametrizationProblem::Solver::repair_is_futile() {
+  st_.futile_repair_skipped = options_.repair_is_futile && options_.repair_is_futile(pose(z_));
+  return st_.futile_repair_skipped;
+}
+
 void ParametrizationProblem::Solver::repair() {
   // Per-face ring count: starts at ring_size and doubles (up to max_ring_size) each round the
   // face is still bad, so that only stubborn clusters get large regions.
@@ -949,7 +966,7 @@ void ParametrizationProblem::Solver::repair() {
   rounds_ = std::max(1, options_.max_repair_rounds);
   touched_.assign(nf_, 0);
   for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1 && !field_frame_solve()) break;
+    if (pass == 1 && (st_.finished_by_caller || !field_frame_solve())) break;
     // After the global solve, the local repair gets half the rounds again.
     local_repair(pass == 0 ? rounds_ : std::max(1, rounds_ / 2));
   }
@@ -1043,9 +1060,15 @@ bool ParametrizationProblem::Solver::repair_step(int round, RepairTrack& track) 
   }
   const bool wide = 2 * region_faces >= nf_;
   track.wide_rounds = track.fewer_bad_round == round ? 0 : track.wide_rounds + wide;
-  if (current_.bad() == 0 || stagnates(round, track) || stops_halving()) return false;
+  if (current_.bad() == 0 || stagnates(round, track) || stops_halving() || caller_finishes(round, track)) return false;
   widen_rings();
   return true;
+}
+
+bool ParametrizationProblem::Solver::caller_finishes(int round, const RepairTrack& track) {
+  if (!options_.caller_finishes || round != track.fewer_bad_round + 1) return false;
+  st_.finished_by_caller = options_.caller_finishes(pose(track.best_z));
+  return st_.finished_by_caller;
 }
 
 bool ParametrizationProblem::Solver::stagnates(int round, const RepairTrack& track) const {
