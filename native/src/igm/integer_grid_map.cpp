@@ -657,10 +657,11 @@ bool IntegerGridMapSolver::untangles_to_regular(const Parametrization& pose) {
   ExactParametrization exact = sanitize_with_isolines(mesh_, pose, isolines_, sanitize_).param;
   int flipped = 0, degenerate = 0;
   count_exact_irregular(exact, &flipped, &degenerate);
-  bool regular = flipped + degenerate <= options_.finish_by_untangle_up_to_share * mesh_.num_faces();
-  if (regular && flipped + degenerate > 0) {
+  const int bad = flipped + degenerate;
+  bool regular = bad <= options_.finish_by_untangle_up_to_share * mesh_.num_faces();
+  if (regular && bad > 0) {
     const MapUntangleStats u = untangle_map(mesh_, snap_vertices_, isolines_, exact, progress_);
-    regular = u.flipped_after + u.degenerate_after == 0;
+    regular = u.flipped_after + u.degenerate_after == 0 && u.moved_vertices <= options_.finish_by_untangle_moves * bad;
   }
   regular = regular && count_exact_winding_defects(mesh_, exact, cones_) == 0;
   stats_.seconds_sanitize += timer.seconds();

@@ -49,8 +49,10 @@ struct IgmOptions {
   // > 0: the hard solve's repair ends at the first round of a plateau (see
   // ParametrizationSolveOptions::caller_finishes) whose pose, rounded exactly, has at most this share
   // of its triangles flipped or degenerate and is regular once untangled (untangle_map, as the caller
-  // then untangles it).
+  // then untangles it), the untangle moving at most finish_by_untangle_moves vertices per flipped or
+  // degenerate triangle.
   double finish_by_untangle_up_to_share = 0;
+  int finish_by_untangle_moves = 0;
   // No repair when the hard solve's equality-only optimum breaks the rows of C z = b by more than
   // kMaxRowViolation: the integer values rounded from the penalty phase then contradict the
   // quantization, the map's area is not the quad count, and no repair changes that.

@@ -206,6 +206,13 @@ constexpr int kRepairRoundsWithoutEscalation = 12;
 // regions kept growing, 4.4 s, before the untangle made it regular; now it stops at the second 3,
 // and the run takes 4.8 s instead of 8.9). A trial that fails costs up to 0.3 s (armadillo, mnf07).
 constexpr double kMaxShareToUntangle = 0.01;
+// A trial counts only where the untangle moves at most this many vertices per flipped or degenerate
+// triangle: the moved vertices bend the quads around them. On the shared meshes at 2 000 and 8 000
+// quads the trials that made maps regular moved 2 per triangle (stanford-bunny 6 for 3; spot,
+// nefertiti, fertility, face, rocker-arm), except camelhead (8 and 22 for 1: at 8 000 quads its
+// Hausdorff distance went 0.85 -> 1.01 %, over the 1 % bound; its repair reaches a map the usual
+// untangle fixes with 2) and mnf07 at 8 000 with sharp edges (53 for 3).
+constexpr int kMaxUntangleMovesToFinish = 3;
 constexpr int kStagnantRoundsWithoutEscalation = 4;
 constexpr int kHalvingRoundsWithoutEscalation = 4;
 // The escalated attempts (grid UVs) stop their repair after this many rounds without fewer bad
