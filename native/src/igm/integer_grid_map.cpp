@@ -547,13 +547,8 @@ ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized
   solve_options_.progress_end = end;
   if (options_.finish_by_untangle_up_to_share > 0)
     solve_options_.caller_finishes = [this](const Parametrization& pose) { return untangles_to_regular(pose); };
-  if (options_.skip_repair_off_the_quantization)
-    solve_options_.repair_is_futile = [this](const Parametrization& pose) {
-      return row_violation(pose) > kMaxRowViolation;
-    };
   ParametrizationSolution solution = problem_.solve(solve_options_, progress_);
   solve_options_.caller_finishes = nullptr;
-  solve_options_.repair_is_futile = nullptr;
   count_solves(solution);
   stats_.flipped_initial = solution.stats.flipped_initial;
   stats_.forced_degenerate = solution.stats.forced_degenerate;
@@ -561,7 +556,6 @@ ParametrizationSolution IntegerGridMapSolver::hard_solve(bool after_relinearized
   stats_.repair_bad_faces = solution.stats.bad_after_round;
   stats_.repair_seconds = solution.stats.seconds_of_round;
   stats_.repair_left_to_untangle = solution.stats.finished_by_caller;
-  stats_.repair_skipped = solution.stats.futile_repair_skipped;
   stats_.max_constraint_violation = row_violation(solution.param);
   return solution;
 }

@@ -53,13 +53,7 @@ struct IgmOptions {
   // degenerate triangle.
   double finish_by_untangle_up_to_share = 0;
   int finish_by_untangle_moves = 0;
-  // No repair when the hard solve's equality-only optimum breaks the rows of C z = b by more than
-  // kMaxRowViolation: the integer values rounded from the penalty phase then contradict the
-  // quantization, the map's area is not the quad count, and no repair changes that.
-  bool skip_repair_off_the_quantization = false;
 };
-// Quad units; a map that meets its rows does so to rounding (about 1e-12).
-constexpr double kMaxRowViolation = 1e-3;
 
 // What one solve of the integer-grid map does (paper §7.1).
 enum class IgmAttempt {
@@ -105,8 +99,6 @@ struct IgmStats {
   std::vector<double> repair_seconds;        // and the time of each round
   bool repair_left_to_untangle = false;      // it ended at a plateau the untangle makes regular
                                              // (IgmOptions::finish_by_untangle_up_to_share)
-  bool repair_skipped = false;               // the map was off its quantization (IgmOptions::
-                                             // skip_repair_off_the_quantization)
   IgmAttempt attempt = IgmAttempt::Default;  // the attempt that made this map
   bool fallback_used = false;                // made by the all-faces attempt
   std::string path;                          // the policy's account of the attempts (pipeline/policy.h)
@@ -229,6 +221,6 @@ QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, forced_degene
                 max_constraint_violation, unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations,
                 qp_by_ipopt, seconds_solve, seconds_sanitize, flipped_before_untangle, degenerate_before_untangle,
                 untangled_vertices, winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds,
-                repair_left_to_untangle, repair_skipped, attempts)
+                repair_left_to_untangle, attempts)
 
 }  // namespace qgp

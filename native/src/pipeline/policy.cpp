@@ -532,7 +532,6 @@ IgmResult solve_integer_grid_map(const ComponentState& state, bool escalate, Pro
     options.skip_repair_if_forced = true;
     options.finish_by_untangle_up_to_share = kMaxShareToUntangle;
     options.finish_by_untangle_moves = kMaxUntangleMovesToFinish;
-    options.skip_repair_off_the_quantization = true;
   }
   IntegerGridMapSolver solver(state.mesh, *state.field, *state.cut, *state.seamless, state.traced->exact,
                               state.traced->tmesh, state.quantization->result, options, progress);

@@ -11,8 +11,8 @@
 //                                           the surface, while fewer stay flipped
 //   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
 //   map                                     stalls or where the untangle finishes it, and none where
-//                                           the integer values make triangles degenerate or break
-//                                           the quantization); for grid UVs, while the map is
+//                                           the integer values make triangles degenerate); for
+//                                           grid UVs, while the map is
 //                                           irregular and the map untangle alone does not make it
 //                                           regular: the re-linearized penalty phase, then the
 //                                           all-faces solve (on parts up to kMaxAllFacesTriangles),
@@ -187,12 +187,7 @@ bool escalates_integer_grid_map(Job job);
 // 5-9 s a round; cycloidal's largest part: 229 131 95 91 76 76 74 78 68 66 66 66).
 // Nor is it repaired at all (nor untangled) where the integer values alone make triangles
 // degenerate, as a quantization that collapses a sliver between two T-edges does: no such map is
-// regular (stanford-bunny at 1 000 quads: 3 such triangles, 9 repair rounds and 3.4 s for nothing);
-// nor where the integer values break the quantization's path rows (IgmOptions::
-// skip_repair_off_the_quantization): the map then covers other than the quads asked and the layout's
-// quads are used whatever the repair does (block with edges over 60 degrees at 2 000 and 8 000
-// quads: rows off by 149 quad units, 1 304 and 1 917 flipped triangles, 10 and 11 repair rounds for
-// 12 and 17 s, 575 and 758 left; the run took 13 and 18 s, now about 1 s, the same quads).
+// regular (stanford-bunny at 1 000 quads: 3 such triangles, 9 repair rounds and 3.4 s for nothing).
 constexpr int kRepairRoundsWithoutEscalation = 12;
 // ...and it is untangled only where at most this share of its triangles are flipped or degenerate:
 // on the shared meshes at 2 000 and 8 000 quads (2026-12-05), the untangle made the map regular

@@ -15,7 +15,7 @@ void normalize_form(LinearForm& form) {
   for (size_t i = 0; i < form.size();) {
     LinearTerm t = form[i++];
     while (i < form.size() && form[i].var == t.var) t.coeff += form[i++].coeff;
-    if (t.coeff != 0) form[out++] = t;
+    if (std::abs(t.coeff) > kZeroCoefficient) form[out++] = t;
   }
   form.resize(out);
 }

@@ -15,7 +15,12 @@ struct LinearTerm {
 };
 using LinearForm = std::vector<LinearTerm>;  // sorted by var, no zero coefficients
 
-// Sorts by variable, merges duplicates and drops zeros.
+// Sorts by variable, merges duplicates and drops zeros, and the rounding residue that cancelled
+// rational coefficients leave after a non-integer pivot (|coeff| <= kZeroCoefficient): the
+// coefficients are small integers and their quotients, so nothing else is that small. Kept, such a
+// residue became a pivot with a constant of about 1e15 (block with sharp edges at 60 degrees: 539
+// of its integer-grid map's equations then counted as inconsistent).
+constexpr double kZeroCoefficient = 1e-12;
 void normalize_form(LinearForm& form);
 
 class LinearElimination {

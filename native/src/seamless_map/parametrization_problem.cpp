@@ -605,8 +605,6 @@ class ParametrizationProblem::Solver {
 
   // Whether the equality-only optimum needs the regularity repair.
   bool needs_repair(const Census& initial) const;
-  // options_.repair_is_futile says so of the equality-only optimum.
-  bool repair_is_futile();
   // The repair rounds (local, global in the field's frame, local again), then re-linearization.
   void repair();
   // One global solve in the field's frame; true when local repair rounds should follow.
@@ -728,7 +726,7 @@ void ParametrizationProblem::Solver::run() {
   current_ = census(z_);
   record_initial_stats();
   find_isoline_rotations();
-  if (needs_repair(current_) && !repair_is_futile()) repair();
+  if (needs_repair(current_)) repair();
   report(1.0);
   write_output();
 }
@@ -950,11 +948,6 @@ bool ParametrizationProblem::Solver::needs_repair(const Census& initial) const {
   if (options_.skip_repair_if_forced && initial.forced > 0) return false;
   return options_.regularity != RegularityMode::Off &&
          (options_.regularity == RegularityMode::AllFaces || initial.bad() > 0);
-}
-
-bool ParametrizationProblem::Solver::repair_is_futile() {
-  st_.futile_repair_skipped = options_.repair_is_futile && options_.repair_is_futile(pose(z_));
-  return st_.futile_repair_skipped;
 }
 
 void ParametrizationProblem::Solver::repair() {
