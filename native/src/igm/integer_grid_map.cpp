@@ -658,7 +658,7 @@ bool IntegerGridMapSolver::untangles_to_regular(const Parametrization& pose) {
     regular = u.flipped_after + u.degenerate_after == 0 && u.moved_vertices <= options_.finish_by_untangle_moves * bad;
   }
   regular = regular && count_exact_winding_defects(mesh_, exact, cones_) == 0;
-  stats_.seconds_sanitize += timer.seconds();
+  stats_.seconds_untangle_trials += timer.seconds();
   return regular;
 }
 

@@ -112,6 +112,7 @@ struct IgmStats {
   int ipopt_solves = 0, ipopt_iterations = 0;  // all attempts so far
   int qp_by_ipopt = 0;                         // of those solves, finished by Ipopt (quadratic_program.h)
   double seconds = 0, seconds_solve = 0, seconds_sanitize = 0;
+  double seconds_untangle_trials = 0;  // of IgmOptions::finish_by_untangle_up_to_share (in seconds_solve)
 };
 
 struct IntegerGridMap {
@@ -221,6 +222,6 @@ QGP_JSON_FIELDS(IgmStats, flipped_triangles, degenerate_triangles, forced_degene
                 max_constraint_violation, unresolved_equations, parametric_area, ipopt_solves, ipopt_iterations,
                 qp_by_ipopt, seconds_solve, seconds_sanitize, flipped_before_untangle, degenerate_before_untangle,
                 untangled_vertices, winding_defects, flipped_initial, faces, repair_bad_faces, repair_seconds,
-                repair_left_to_untangle, attempts)
+                repair_left_to_untangle, seconds_untangle_trials, attempts)
 
 }  // namespace qgp
