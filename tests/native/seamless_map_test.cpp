@@ -542,6 +542,13 @@ void pin_clockwise_faces(CubeProblem& p) {
   }
 }
 
+// pin_clockwise_faces, with the cube's cone angles: the repair then also winds one-rings and, when
+// its local rounds leave bad faces, solves globally in the field's frame.
+void pin_clockwise_faces_with_cones(CubeProblem& p) {
+  pin_clockwise_faces(p);
+  p.problem.set_cone_angles(cube_cones(p.cube));
+}
+
 void expect_pinned_faces_folded(const ParametrizationSolution& s) {
   EXPECT_LT(s.stats.constraint_violation, 1e-9);
   EXPECT_GE(s.stats.flipped, 3);
@@ -598,8 +605,7 @@ TEST(ParametrizationProblem, FieldFrameSolveCanBeLeftToTheCaller) {
   // as the pipeline's first map of a field with cancelled singularity pairs) the repair ends after
   // the local rounds, and the stagnation bound ends those early.
   CubeProblem p;
-  pin_clockwise_faces(p);
-  p.problem.set_cone_angles(cube_cones(p.cube));
+  pin_clockwise_faces_with_cones(p);
   ParametrizationSolveOptions full;
   const ParametrizationSolution with_global = p.problem.solve(full, p.progress);
   ParametrizationSolveOptions local = full;
@@ -618,8 +624,7 @@ TEST(ParametrizationProblem, CallerFinishesARepairAtAPlateau) {
   // bounds; accepting ends it there (the field-frame solve and later rounds skipped) and the
   // solution is the pose the caller accepted.
   CubeProblem p;
-  pin_clockwise_faces(p);
-  p.problem.set_cone_angles(cube_cones(p.cube));
+  pin_clockwise_faces_with_cones(p);
   ParametrizationSolveOptions plain;
   const ParametrizationSolution unbounded = p.problem.solve(plain, p.progress);
 
