@@ -599,6 +599,36 @@ TEST(ParametrizationProblem, RegionStagnationEndsRoundsOverMostOfTheMesh) {
   for (auto it = bad.end() - 4; it != bad.end(); ++it) EXPECT_GE(*it, before);
 }
 
+TEST(ParametrizationProblem, RepairIsDeclinedOverTheCallersShareOfBadFaces) {
+  // max_bad_share_to_repair: a start with more bad faces than this share of the faces is returned
+  // as solved, unrepaired and marked declined (the pipeline sends such a part on needle triangles
+  // to its isotropic remesh); at exactly the share the repair runs.
+  CubeProblem p;
+  pin_clockwise_faces(p);
+  const int nf = p.cube.mesh.num_faces();
+  ParametrizationSolveOptions plain;
+  const ParametrizationSolution repaired = p.problem.solve(plain, p.progress);
+  const ParametrizationSolveStats& first = repaired.stats;
+  const int bad_at_start = first.flipped_initial + first.degenerate_initial + first.thin_initial;
+  ASSERT_GE(bad_at_start, 3);
+  EXPECT_FALSE(first.repair_declined);
+  EXPECT_GT(first.repair_rounds, 0);
+
+  ParametrizationSolveOptions below = plain, at = plain;
+  below.max_bad_share_to_repair = (bad_at_start - 0.5) / nf;
+  at.max_bad_share_to_repair = static_cast<double>(bad_at_start) / nf;
+  const ParametrizationSolution declined = p.problem.solve(below, p.progress);
+  EXPECT_TRUE(declined.stats.repair_declined);
+  EXPECT_EQ(declined.stats.repair_rounds, 0);
+  EXPECT_EQ(declined.stats.flipped, declined.stats.flipped_initial);
+  EXPECT_EQ(declined.stats.degenerate, declined.stats.degenerate_initial);
+  EXPECT_LT(declined.stats.constraint_violation, 1e-9);
+  const ParametrizationSolution taken = p.problem.solve(at, p.progress);
+  EXPECT_FALSE(taken.stats.repair_declined);
+  EXPECT_EQ(taken.stats.repair_rounds, first.repair_rounds);
+  EXPECT_EQ(taken.stats.flipped, first.flipped);
+}
+
 TEST(ParametrizationProblem, FieldFrameSolveCanBeLeftToTheCaller) {
   // With cone angles, a local repair that leaves bad faces (the pinned folds) is followed by one
   // global solve in the field's frame and more local rounds; without it (a caller with a fallback,

@@ -605,6 +605,8 @@ class ParametrizationProblem::Solver {
 
   // Whether the equality-only optimum needs the regularity repair.
   bool needs_repair(const Census& initial) const;
+  // More bad faces at the start than the caller lets the repair take on.
+  bool declines_repair(const Census& initial) const;
   // The repair rounds (local, global in the field's frame, local again), then re-linearization.
   void repair();
   // One global solve in the field's frame; true when local repair rounds should follow.
@@ -726,7 +728,8 @@ void ParametrizationProblem::Solver::run() {
   current_ = census(z_);
   record_initial_stats();
   find_isoline_rotations();
-  if (needs_repair(current_)) repair();
+  st_.repair_declined = declines_repair(current_);
+  if (!st_.repair_declined && needs_repair(current_)) repair();
   report(1.0);
   write_output();
 }
@@ -942,6 +945,10 @@ std::vector<int> ParametrizationProblem::Solver::region_parts(const std::vector<
     }
   }
   return part;
+}
+
+bool ParametrizationProblem::Solver::declines_repair(const Census& initial) const {
+  return initial.bad() > options_.max_bad_share_to_repair * nf_;
 }
 
 bool ParametrizationProblem::Solver::needs_repair(const Census& initial) const {

@@ -81,6 +81,9 @@ struct ParametrizationSolveOptions {
   bool skip_repair_if_forced = false;          // no repair where the hard constraints make faces
                                                // degenerate: no map can be regular then (for callers
                                                // that use a regular map or none)
+  double max_bad_share_to_repair = 1;          // no repair when more than this share of the faces are
+                                               // bad at the start (for callers with a fallback that
+                                               // serves such a start better)
   // Called once per plateau of the local repair (the first round that leaves the best pose's bad
   // faces no fewer), with that pose; true ends the repair there with it. For callers that finish a
   // nearly regular pose themselves (the integer-grid map untangles it): a plateau's further rounds
@@ -110,6 +113,7 @@ struct ParametrizationSolveStats {
   std::vector<double> seconds_of_round;  // time of each repair round
   int field_frame_solves = 0;            // global solves with every face in its field-frame sectors
   bool finished_by_caller = false;       // the repair ended where options.caller_finishes said so
+  bool repair_declined = false;          // not repaired: more bad faces than max_bad_share_to_repair
   int max_region_faces = 0, max_qp_variables = 0;
   int non_integer_pivots = 0, redundant_constraints = 0, inconsistent_constraints = 0;
   double seconds_assembly = 0, seconds_cholesky = 0, seconds_ipopt = 0;
