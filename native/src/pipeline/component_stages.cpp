@@ -47,7 +47,8 @@ void update_cut_graph(ComponentState& state, Progress& progress) {
   state.cut.store(state.field.id(), compute_cut_graph(state.mesh, *state.field, progress));
 }
 
-void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress) {
+void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress,
+                         bool remesh_follows) {
   const uint64_t sizing = sizes_hash(face_size);
   if (state.seamless.has_value() && state.seamless.key().cut == state.cut.id() &&
       state.seamless.key().sizing == sizing && seamless_map_serves(state.seamless.key().edge_length, edge_length))
@@ -57,8 +58,15 @@ void update_seamless_map(ComponentState& state, double edge_length, std::vector<
   options.face_size = std::move(face_size);
   options.region_stagnation_rounds = kSeamlessStagnantRounds;
   bound_repair_where_pairs_were_cancelled(state, options);
+  if (remesh_follows) options.max_bad_share_to_repair = kMaxBadShareToRepairOnNeedles;
   state.seamless.store({state.cut.id(), edge_length, sizing},
                        compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
+  const SeamlessMapStats& s = state.seamless->stats;
+  if (s.repair_declined)
+    throw Error(ErrorCode::StageFailed,
+                "seamless map: " + std::to_string(s.flipped_triangles + s.degenerate_triangles) + " of " +
+                    std::to_string(state.mesh.num_faces()) +
+                    " triangles flipped or degenerate on needle triangles across features, not repaired there");
 }
 
 void update_tmesh(ComponentState& state, Progress& progress) {

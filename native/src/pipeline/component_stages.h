@@ -15,8 +15,10 @@ void update_cross_field(ComponentState& state, double edge_length, bool cancel_p
 void update_cut_graph(ComponentState& state, Progress& progress);
 // Stage 1c: the seamless map for quads of `edge_length` times face_size (the sizing field, #F, or
 // empty; a map solved for a nearby length and the same sizes is rescaled instead, see
-// seamless_map_serves).
-void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress);
+// seamless_map_serves). remesh_follows: a map that starts folded on the part's own triangles is not
+// repaired; Error(StageFailed) says so (policy.h: remesh_follows_a_folded_start).
+void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress,
+                         bool remesh_follows = false);
 // Stage 2: the seamless map made exact with features and boundary on isolines, and its T-mesh.
 void update_tmesh(ComponentState& state, Progress& progress);
 // Stage 3: integer T-edge lengths for quads of `edge_length`, by the chosen quantizer; the greedy

@@ -287,6 +287,10 @@ bool retry_on_isotropic_remesh(const ComponentState& state, Job job) {
   return state.failure && on_needles_across_features(state, job);
 }
 
+bool remesh_follows_a_folded_start(const ComponentState& state, Job job, bool rescues_failed_parts) {
+  return rescues_failed_parts && on_needles_across_features(state, job);
+}
+
 bool retry_without_cancelled_pairs(const ComponentState& state) {
   return state.failure && field_cancelled_pairs(state) && finer_density_may_help(state.failure->stage);
 }

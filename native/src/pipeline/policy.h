@@ -28,7 +28,9 @@
 //                                           seamless map then folds
 //   failed part    retry_on_isotropic_remesh   a remesh part with feature edges across needle
 //                                           triangles (a CAD tessellation) that failed on its own
-//                                           triangles: run again on an isotropic remesh of them;
+//                                           triangles (or whose seamless map started folded there,
+//                                           remesh_follows_a_folded_start): run again on an
+//                                           isotropic remesh of them;
 //                  kMaxQuadDistanceInEdges  also one whose quads lie far off its surface
 //                  retry_without_cancelled_pairs   a remesh part that failed after its field
 //                                           cancelled close pairs: run again with the field without
@@ -114,6 +116,14 @@ bool remesh_may_bring_quads_closer(const ComponentState& state, Job job);
 // edges over 60 degrees at 2 000 quads: 0.22 s and 11 irregular vertices on its 446 triangles, 1.7 s
 // and 24 on the remesh); featuretype's map folds on them (15 flipped triangles).
 bool retry_on_isotropic_remesh(const ComponentState& state, Job job);
+// Such a part goes there at once, without a repair on its needles, when its seamless map starts
+// with more than this share of its triangles flipped or degenerate (the stage fails, the isotropic
+// remesh follows): featuretype with edges over 40 degrees at 2 000 quads started with 126 of its
+// 3 476 triangles (3.6 %) flipped, 14 repair rounds and a global solve (12 s, three rounds finished
+// by Ipopt) left 15 and its T-mesh failed; joint, whose map holds on its needles, starts with none.
+constexpr double kMaxBadShareToRepairOnNeedles = 0.01;
+// True when the part's seamless map is solved that way (a remesh job that rescues failed parts).
+bool remesh_follows_a_folded_start(const ComponentState& state, Job job, bool rescues_failed_parts);
 
 // Re-quantizations against a folding layout.
 constexpr int kMaxFoldRounds = 8;

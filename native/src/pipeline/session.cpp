@@ -539,11 +539,12 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for_each_component(job, "cut_graph", progress, [&](ComponentState& s) { update_cut_graph(s, progress); });
   report_["field"] = field_report(components_);
   for_each_component(job, "seamless_map", progress, [&](ComponentState& s) {
-    update_seamless_map(s, edge_length, component_face_sizes(s), progress);
+    const bool remesh_follows = remesh_follows_a_folded_start(s, job, rescues_failed_components(job));
+    update_seamless_map(s, edge_length, component_face_sizes(s), progress, remesh_follows);
     if (!seamless_map_folds_where_pairs_were_cancelled(s)) return;
     update_cross_field(s, edge_length, false, progress);
     update_cut_graph(s, progress);
-    update_seamless_map(s, edge_length, component_face_sizes(s), progress);
+    update_seamless_map(s, edge_length, component_face_sizes(s), progress, remesh_follows);
   });
   report_["field"] = field_report(components_);  // again: a component may have fallen back
   report_["seamless"] = seamless_report(components_, edge_length);
