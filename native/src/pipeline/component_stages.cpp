@@ -31,6 +31,16 @@ Quantized quantize_by_rounding_baseline(const ComponentState& state, double scal
   return q;
 }
 
+// A map whose repair was declined (it started folded on needle triangles) fails the stage.
+void throw_if_repair_declined(const ComponentState& state) {
+  const SeamlessMapStats& s = state.seamless->stats;
+  if (!s.repair_declined) return;
+  throw Error(ErrorCode::StageFailed,
+              "seamless map: " + std::to_string(s.flipped_triangles + s.degenerate_triangles) + " of " +
+                  std::to_string(state.mesh.num_faces()) +
+                  " triangles flipped or degenerate on needle triangles across features, not repaired there");
+}
+
 }  // namespace
 
 void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress) {
@@ -51,8 +61,10 @@ void update_seamless_map(ComponentState& state, double edge_length, std::vector<
                          bool remesh_follows) {
   const uint64_t sizing = sizes_hash(face_size);
   if (state.seamless.has_value() && state.seamless.key().cut == state.cut.id() &&
-      state.seamless.key().sizing == sizing && seamless_map_serves(state.seamless.key().edge_length, edge_length))
+      state.seamless.key().sizing == sizing && seamless_map_serves(state.seamless.key().edge_length, edge_length)) {
+    throw_if_repair_declined(state);
     return;  // re-quantized only
+  }
   SeamlessMapOptions options;
   options.edge_length = edge_length;
   options.face_size = std::move(face_size);
@@ -61,12 +73,7 @@ void update_seamless_map(ComponentState& state, double edge_length, std::vector<
   if (remesh_follows) options.max_bad_share_to_repair = kMaxBadShareToRepairOnNeedles;
   state.seamless.store({state.cut.id(), edge_length, sizing},
                        compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
-  const SeamlessMapStats& s = state.seamless->stats;
-  if (s.repair_declined)
-    throw Error(ErrorCode::StageFailed,
-                "seamless map: " + std::to_string(s.flipped_triangles + s.degenerate_triangles) + " of " +
-                    std::to_string(state.mesh.num_faces()) +
-                    " triangles flipped or degenerate on needle triangles across features, not repaired there");
+  throw_if_repair_declined(state);
 }
 
 void update_tmesh(ComponentState& state, Progress& progress) {
