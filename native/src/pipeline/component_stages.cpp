@@ -60,19 +60,19 @@ void update_cut_graph(ComponentState& state, Progress& progress) {
 void update_seamless_map(ComponentState& state, double edge_length, std::vector<double> face_size, Progress& progress,
                          bool remesh_follows) {
   const uint64_t sizing = sizes_hash(face_size);
-  if (state.seamless.has_value() && state.seamless.key().cut == state.cut.id() &&
-      state.seamless.key().sizing == sizing && seamless_map_serves(state.seamless.key().edge_length, edge_length)) {
-    throw_if_repair_declined(state);
-    return;  // re-quantized only
+  const bool stored_serves = state.seamless.has_value() && state.seamless.key().cut == state.cut.id() &&
+                             state.seamless.key().sizing == sizing &&
+                             seamless_map_serves(state.seamless.key().edge_length, edge_length);
+  if (!stored_serves) {  // otherwise re-quantized only
+    SeamlessMapOptions options;
+    options.edge_length = edge_length;
+    options.face_size = std::move(face_size);
+    options.region_stagnation_rounds = kSeamlessStagnantRounds;
+    bound_repair_where_pairs_were_cancelled(state, options);
+    if (remesh_follows) options.max_bad_share_to_repair = kMaxBadShareToRepairOnNeedles;
+    state.seamless.store({state.cut.id(), edge_length, sizing},
+                         compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
   }
-  SeamlessMapOptions options;
-  options.edge_length = edge_length;
-  options.face_size = std::move(face_size);
-  options.region_stagnation_rounds = kSeamlessStagnantRounds;
-  bound_repair_where_pairs_were_cancelled(state, options);
-  if (remesh_follows) options.max_bad_share_to_repair = kMaxBadShareToRepairOnNeedles;
-  state.seamless.store({state.cut.id(), edge_length, sizing},
-                       compute_seamless_map(state.mesh, *state.field, *state.cut, options, progress));
   throw_if_repair_declined(state);
 }
 
