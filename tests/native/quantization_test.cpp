@@ -568,30 +568,42 @@ TEST(Quantization, CoarseScalesProduceZeroEdgesAndStayValid) {
   }
 }
 
-// Zero edges of a coarse run, given a minimum length of 1, come out positive on the next run; the
-// result keeps every invariant and no marked edge is zero.
+// Zero edges of a coarse run, given a minimum length of 1 (bound 1) or 2 (bound 2), and edges of
+// length 1 given a minimum of 2, reach their bounds on the next run; the result keeps every
+// invariant.
 TEST(Quantization, MinimumLengthKeepsMarkedEdgesPositive) {
-  for (const Family& family : families()) {
-    const TMesh tm = family.make(300, 2);
-    const double scale = quantization_scale_for_quads(tm, 60);
-    const QuantizationResult first = run_greedy(tm, scale);
-    ASSERT_GT(first.zero_edges, 0) << family.name;
-    QuantizationOptions options;
-    options.scale = scale;
-    options.min_length.assign(tm.edges.size(), 0);
-    int marked = 0;
-    for (size_t e = 0; e < tm.edges.size(); ++e)
-      if (first.x[e] == 0 && marked < first.zero_edges / 2 + 1) options.min_length[e] = 1, ++marked;
-    Progress progress;
-    const QuantizationResult second = quantize(tm, options, progress);
-    expect_result_invariants(tm, second, family.name + " min length");
-    for (size_t e = 0; e < tm.edges.size(); ++e)
-      if (options.min_length[e]) EXPECT_GE(second.x[e], 1) << family.name << " edge " << e;
+  for (int64_t bound : {1, 2}) {
+    for (const Family& family : families()) {
+      const std::string where = family.name + " bound " + std::to_string(bound);
+      const TMesh tm = family.make(300, 2);
+      const double scale = quantization_scale_for_quads(tm, 60);
+      const QuantizationResult first = run_greedy(tm, scale);
+      ASSERT_GT(first.zero_edges, 0) << where;
+      QuantizationOptions options;
+      options.scale = scale;
+      options.min_length.assign(tm.edges.size(), 0);
+      int marked = 0, marked_ones = 0;
+      for (size_t e = 0; e < tm.edges.size(); ++e) {
+        if (first.x[e] == 0 && marked < first.zero_edges / 2 + 1) options.min_length[e] = bound, ++marked;
+        if (bound == 2 && first.x[e] == 1 && marked_ones < 5) options.min_length[e] = 2, ++marked_ones;
+      }
+      Progress progress;
+      const QuantizationResult second = quantize(tm, options, progress);
+      expect_result_invariants(tm, second, where);
+      EXPECT_EQ(second.unreachable_edges, 0) << where;
+      for (size_t e = 0; e < tm.edges.size(); ++e)
+        EXPECT_GE(second.x[e], options.min_length[e]) << where << " edge " << e;
+    }
   }
   QuantizationOptions wrong;
   wrong.min_length.assign(3, 0);
   Progress progress;
   EXPECT_THROW(quantize(families()[0].make(300, 2), wrong, progress), Error);
+  const TMesh tm = families()[0].make(300, 2);
+  QuantizationOptions negative;
+  negative.min_length.assign(tm.edges.size(), 0);
+  negative.min_length[0] = -1;
+  EXPECT_THROW(quantize(tm, negative, progress), Error);
 }
 
 // ---------------------------------------------------------------------------------------------

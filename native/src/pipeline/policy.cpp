@@ -49,14 +49,25 @@ std::vector<int> zero_edges_around(const TMesh& tm, const LayoutQuads& layout, c
   return edges;
 }
 
-// Zero T-edges whose collapse folds the quad layout: those around the cells whose layout quads are
-// not manifold (zero_edges_around). Empty when the layout is a manifold quad mesh (the
-// connectivity every map with this quantization gives).
-std::vector<int> folding_zero_edges(const ComponentState& state, const std::vector<int64_t>& x, int rings) {
+// Lower bounds that unfold the quad layout of x where it is not a manifold: the zero T-edges
+// around the cells of its non-manifold quads (zero_edges_around) are kept at 1, and those cells
+// that are pinched (a quad repeating a node) are kept open (keep_pinched_cell_open). Returns
+// whether any bound rose; false when the layout is a manifold quad mesh (the connectivity every
+// map with this quantization gives).
+bool raise_bounds_where_layout_folds(const ComponentState& state, const std::vector<int64_t>& x, int rings,
+                                     std::vector<int64_t>& min_length) {
   Progress quiet;
   const TMesh& tm = state.traced->tmesh;
   const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, tm, x, quiet, false);
-  return zero_edges_around(tm, layout, non_manifold_quads(layout.quads), x, rings);
+  const std::vector<char> bad = non_manifold_quads(layout.quads);
+  min_length.resize(tm.edges.size(), 0);
+  bool raised = false;
+  for (int e : zero_edges_around(tm, layout, bad, x, rings)) raised = raised || min_length[e] < 1, min_length[e] = 1;
+  std::vector<char> bad_cell(tm.cells.size(), 0);
+  for (size_t q = 0; q < bad.size(); ++q) bad_cell[layout.quad_cell[q]] |= bad[q];
+  for (const PinchedCell& pinched : pinched_cells(tm))
+    if (bad_cell[pinched.cell]) raised = keep_pinched_cell_open(tm, pinched, min_length) || raised;
+  return raised;
 }
 
 UntangleStats untangle_on_surface(const ComponentState& state, const std::vector<char>& feature_edges, QuadMesh& quads,
@@ -315,15 +326,12 @@ Quantized quantize_without_folds(const ComponentState& state, double scale, Prog
   Quantized q;
   q.result = quantize(tmesh, options, progress);
   for (int round = 0; round < kMaxFoldRounds; ++round) {
-    const std::vector<int> edges = folding_zero_edges(state, q.result.x, round);
-    if (edges.empty()) break;
-    options.min_length.resize(tmesh.edges.size(), 0);
-    for (int e : edges) options.min_length[e] = 1;
+    if (!raise_bounds_where_layout_folds(state, q.result.x, round, options.min_length)) break;
     q.result = quantize(tmesh, options, progress);
     q.fold_rounds = round + 1;
   }
   keep_zero_edges_where_layout_flips(state, options, q, progress);
-  for (int64_t m : options.min_length) q.kept_positive_edges += static_cast<int>(m);
+  for (int64_t m : options.min_length) q.kept_positive_edges += m > 0;
   return q;
 }
 

@@ -6,7 +6,8 @@
 //                                           when its count is off; the fewest quads measured when
 //                                           more than asked remain
 //                  quantize_without_folds   greedy quantization; zero T-edges whose collapse folds
-//                                           the quad layout kept at length 1, quantized again; then
+//                                           the quad layout kept at length 1, pinched cells there
+//                                           kept 2 quads across, quantized again; then
 //                                           those around layout quads that stay flipped against
 //                                           the surface, while fewer stay flipped
 //   integer-grid   solve_integer_grid_map   default solve (for quads, its repair cut short where it
@@ -156,7 +157,9 @@ std::vector<char> sharp_tip_vertices(const TriMesh& mesh);
 // Greedy quantization of the component's T-mesh at `scale`. A valid quantization can still
 // collapse cells so that the layout folds (a regular point between two quads only, two quads on
 // both sides of one edge): the zero edges there, and in a widening ring of cells around, are kept
-// at length 1 and the T-mesh is quantized again, up to kMaxFoldRounds times. Then, while the
+// at length 1, a pinched cell there whose single quad repeats a node is kept 2 quads across
+// (keep_pinched_cell_open; dragon-genus1's cluster of three singular points at 2 000 quads), and
+// the T-mesh is quantized again, up to kMaxFoldRounds times. Then, while the
 // layout's quads placed on the surface stay flipped against it (collapsed cells squeeze them where
 // the part is thin or sharply curved), the zero edges around their cells are kept at 1 the same
 // way, up to kMaxFlipRounds times and kMaxFlipRings cells away; a round is kept only when it leaves

@@ -42,8 +42,10 @@ struct QuantizationOptions {
   // records explored regions per cluster of 16 edges instead of per edge (same result, more
   // generating-vector searches).
   int64_t cache_budget = int64_t(1) << 24;
-  // Per T-edge lower bound of x in stage II (empty: 0 everywhere; otherwise #edges values of 0 or
-  // 1). The session raises it to 1 on zero edges whose collapse folds the quad layout.
+  // Per T-edge lower bound of x (empty: 0 everywhere; otherwise #edges values >= 0): stage I adds
+  // generating vectors through an edge until it reaches max(1, bound), stage II never goes below it.
+  // The session raises it to 1 on zero edges whose collapse folds the quad layout, and to 2 across
+  // pinched cells whose single quad repeats a node (keep_pinched_cell_open).
   std::vector<int64_t> min_length;
   // Tests: recompute the full objective from scratch after every accepted stage II step (O(#edges)
   // each) instead of recording the incrementally updated value.
@@ -95,6 +97,20 @@ struct QuantizationValidity {
 };
 // x: #edges, must be >= 0 with Ax = 0 (throws Error(InvalidArgument) otherwise).
 QuantizationValidity check_quantization_validity(const TMesh& tmesh, const std::vector<int64_t>& x);
+
+// A pinched cell: its boundary meets one node at two of its corners (a cell wrapped around part of
+// a singularity's one-ring whose separatrices return to it, as between clustered singularities). At
+// width and height 1 its single layout quad repeats that node, so no map of those lengths is a quad
+// mesh. The side that must be at least 2 long to open it: for two adjacent corners the side
+// between them; for opposite corners side 0 or 1, whichever is longer in the seamless map.
+struct PinchedCell {
+  int cell = -1;
+  int side = -1;
+};
+std::vector<PinchedCell> pinched_cells(const TMesh& tmesh);
+// Raises min_length (#edges) so that the pinched cell's side sums to at least 2: a side of one
+// edge to 2, otherwise its two longest edges to 1. Returns whether any bound rose.
+bool keep_pinched_cell_open(const TMesh& tmesh, const PinchedCell& pinched, std::vector<int64_t>& min_length);
 
 // Scale such that sum over cells of scale^2 * width * height (continuous) equals target_quads.
 double quantization_scale_for_quads(const TMesh& tmesh, double target_quads);

@@ -2,6 +2,7 @@
 #include <gmpxx.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -152,15 +153,16 @@ class GreedyQuantizer {
     for (int k = 0; k < E; ++k) {
       const int e = order[k];
       if (tick.seconds() > 0.1) progress_.update(0.3 * k / E), tick = Timer();
-      if (x_[e] != 0) continue;
-      ++searches_;
-      if (!search_.find(e, w_plus_, dnodes_, nullptr)) {
-        ++r.unreachable_edges;
-        continue;
+      while (x_[e] < std::max<int64_t>(1, min_length_[e])) {
+        ++searches_;
+        if (!search_.find(e, w_plus_, dnodes_, nullptr)) {
+          ++r.unreachable_edges;
+          break;
+        }
+        collect_changes(dnodes_, +1);
+        apply_changes(+1);
+        ++r.stage1_steps;
       }
-      collect_changes(dnodes_, +1);
-      apply_changes(+1);
-      ++r.stage1_steps;
     }
   }
 
@@ -443,11 +445,50 @@ QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& optio
   if (!options.min_length.empty() && options.min_length.size() != tmesh.edges.size())
     throw Error(ErrorCode::InvalidArgument, "quantization: min_length must have one value per T-edge");
   for (int64_t m : options.min_length)
-    if (m < 0 || m > 1) throw Error(ErrorCode::InvalidArgument, "quantization: min_length values must be 0 or 1");
+    if (m < 0) throw Error(ErrorCode::InvalidArgument, "quantization: min_length values must be non-negative");
   if (!(options.min_ideal_length > 0))
     throw Error(ErrorCode::InvalidArgument, "quantization: min_ideal_length must be positive");
   GreedyQuantizer quantizer(tmesh, options, progress);
   return quantizer.run();
+}
+
+std::vector<PinchedCell> pinched_cells(const TMesh& tmesh) {
+  const CellSystem sys(tmesh);
+  std::vector<PinchedCell> pinched;
+  for (int c = 0; c < sys.num_cells(); ++c) {
+    std::array<int, 4> corner{};
+    for (int s = 0; s < 4; ++s) corner[s] = sys.occ_start_node[sys.side_begin(c, s)];
+    for (int s = 0; s < 4; ++s)
+      if (corner[s] == corner[(s + 1) % 4]) {
+        pinched.push_back({c, s});
+        break;
+      }
+    if (!pinched.empty() && pinched.back().cell == c) continue;
+    if (corner[0] == corner[2] || corner[1] == corner[3]) {
+      double length[2] = {0, 0};
+      for (int s = 0; s < 2; ++s)
+        for (int e : tmesh.cells[c].sides[s]) length[s] += tmesh.edges[e].length;
+      pinched.push_back({c, length[1] > length[0] ? 1 : 0});
+    }
+  }
+  return pinched;
+}
+
+bool keep_pinched_cell_open(const TMesh& tmesh, const PinchedCell& pinched, std::vector<int64_t>& min_length) {
+  std::vector<int> edges = tmesh.cells.at(pinched.cell).sides.at(pinched.side);
+  if (min_length.size() != tmesh.edges.size() || edges.empty())
+    throw Error(ErrorCode::InvalidArgument, "quantization: one bound per T-edge and a side with edges expected");
+  auto raise = [&](int e, int64_t bound) {
+    const bool rises = min_length[e] < bound;
+    min_length[e] = std::max(min_length[e], bound);
+    return rises;
+  };
+  if (edges.size() == 1) return raise(edges[0], 2);
+  std::partial_sort(edges.begin(), edges.begin() + 2, edges.end(), [&](int a, int b) {
+    return tmesh.edges[a].length > tmesh.edges[b].length || (tmesh.edges[a].length == tmesh.edges[b].length && a < b);
+  });
+  const bool first = raise(edges[0], 1);
+  return raise(edges[1], 1) || first;
 }
 
 QuantizationValidity check_quantization_validity(const TMesh& tmesh, const std::vector<int64_t>& x) {
