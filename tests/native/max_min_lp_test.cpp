@@ -60,7 +60,10 @@ Vec2 reference_argmax(const std::vector<double>& c, const std::vector<Vec2>& g, 
   return best;
 }
 
-// Stars of 2 to 8 quads (5 terms each), as the untangle builds them, around varied centres.
+// Stars of 2 to 8 quads (5 terms each), as the untangle builds them, around varied centres; some
+// with terms far above the others (never the worst: left out of the first enumeration) and some
+// with constant terms (the corner opposite the moving vertex: a plateau of optima where one is the
+// worst, on which the full order of the candidates decides).
 TEST(MaxMinLp, SameAnswerAsEvaluatingEveryTermAndNoBetterPoint) {
   std::mt19937 rng(11);
   std::normal_distribution<double> normal(0, 1);
@@ -75,6 +78,10 @@ TEST(MaxMinLp, SameAnswerAsEvaluatingEveryTermAndNoBetterPoint) {
       g[i] = Vec2(normal(rng), normal(rng));
     }
     if (instance % 4 == 0) g[1] = g[0];  // parallel terms
+    if (instance % 3 == 0)
+      for (int i = 0; i < m; i += 2) c[i] += 20;  // never the worst
+    if (instance % 5 < 2)
+      for (int i = 2; i < m; i += 5) g[i] = Vec2::Zero(), c[i] -= instance % 5 == 0 ? 3 : 0.5;  // constant
     const Vec2 centre(0.5 * unit(rng), 0.5 * unit(rng));
     const double radius = std::max(1.0, centre.norm());
     const Vec2 d = maximize_worst_term(c, g, centre, radius);

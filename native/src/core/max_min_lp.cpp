@@ -6,14 +6,33 @@
 
 namespace qgp {
 
-Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& g, const Vec2& centre, double radius) {
-  const size_t m = c.size();
+namespace {
+
+struct Octagon {
+  Vec2 centre;
+  double radius = 1;
   Vec2 corner[8], side[8];
-  for (int k = 0; k < 8; ++k) {
-    side[k] = Vec2(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
-    corner[k] =
-        centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
+  Octagon(const Vec2& c, double r) : centre(c), radius(r) {
+    for (int k = 0; k < 8; ++k) {
+      side[k] = Vec2(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
+      corner[k] = c + r / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
+    }
   }
+};
+
+struct Candidate {
+  Vec2 d;
+  double worst;
+};
+
+// The candidates of the octagon (corners, sides) in their order, each judged by all terms: the
+// first strictly best one.
+Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon) {
+  const size_t m = c.size();
+  const Vec2(&corner)[8] = octagon.corner;
+  const Vec2(&side)[8] = octagon.side;
+  const Vec2& centre = octagon.centre;
+  const double radius = octagon.radius;
   auto inside = [&](const Vec2& d) {
     for (const Vec2& u : side)
       if (u.dot(d - centre) > radius * (1 + 1e-9)) return false;
@@ -68,7 +87,55 @@ Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& 
         if (inside(d)) consider(d);
       }
     }
-  return best;
+  return {best, best_value};
+}
+
+// The terms that can be the smallest somewhere in the octagon, in their order. Let U be the
+// smallest of the terms' largest values there: a term whose least value exceeds U is larger
+// everywhere than the term whose largest value is U, so it is never the worst term (judged over a
+// slightly larger octagon, as candidates up to 1e-9 outside count as inside).
+void keep_terms_that_can_be_worst(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
+                                  std::vector<double>& kept_c, std::vector<Vec2>& kept_g) {
+  const size_t m = c.size();
+  std::vector<double> least(m);
+  double bound = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < m; ++i) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec2& corner : octagon.corner) {
+      const double v = c[i] + g[i].dot(octagon.centre + (1 + 1e-6) * (corner - octagon.centre));
+      lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+    least[i] = lo;
+    bound = std::min(bound, hi);
+  }
+  const double margin = 1e-9 * (1 + std::abs(bound));
+  kept_c.clear(), kept_g.clear();
+  for (size_t i = 0; i < m; ++i)
+    if (!(least[i] > bound + margin)) kept_c.push_back(c[i]), kept_g.push_back(g[i]);
+}
+
+// Whether a term that does not depend on d (the corner of a quad opposite the moving vertex) is
+// within a margin of `worst`: then the optimum may be a plateau, where the order of the candidates
+// decides which point is returned.
+bool constant_term_at(const std::vector<double>& c, const std::vector<Vec2>& g, double worst) {
+  for (size_t i = 0; i < c.size(); ++i)
+    if (g[i].isZero() && c[i] <= worst + 1e-9 * (1 + std::abs(worst))) return true;
+  return false;
+}
+
+}  // namespace
+
+// The optimum over the terms that can be the worst (O(k^3) for k of them instead of m) is the
+// optimum of all terms where it is unique. Where a constant term is the worst, every candidate is
+// judged again in the full order, so the answer is always that of the full enumeration.
+Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& g, const Vec2& centre, double radius) {
+  const Octagon octagon(centre, radius);
+  thread_local std::vector<double> kept_c;
+  thread_local std::vector<Vec2> kept_g;
+  keep_terms_that_can_be_worst(c, g, octagon, kept_c, kept_g);
+  const Candidate fast = best_candidate(kept_c, kept_g, octagon);
+  if (kept_c.size() == c.size() || !constant_term_at(c, g, fast.worst)) return fast.d;
+  return best_candidate(c, g, octagon).d;
 }
 
 double maximize_worst_term_1d(const std::vector<double>& c, const std::vector<double>& g) {
