@@ -61,7 +61,8 @@ def main():
             if os.path.exists(out):
                 failures.append(f"{sig.name}: {out} was written")
         out = os.path.join(tmp, "out_exit.obj")
-        env = dict(os.environ, LD_PRELOAD=os.path.abspath(args.exit_preload), QGP_TEST_EXIT_AFTER_MS=str(int(1000 * cpu_seconds)))
+        env = dict(os.environ, LD_PRELOAD=os.path.abspath(args.exit_preload),
+                   QGP_TEST_EXIT_AFTER_MS=str(int(1000 * cpu_seconds)))
         proc = subprocess.run([args.qgp, "remesh", *run, "-o", out], capture_output=True, text=True, env=env,
                               timeout=120)
         print(f"exit(0) from a library: exit {proc.returncode}, stderr: {proc.stderr.strip()[-100:]}")
