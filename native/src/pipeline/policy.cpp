@@ -62,7 +62,10 @@ bool raise_bounds_where_layout_folds(const ComponentState& state, const std::vec
   const std::vector<char> bad = non_manifold_quads(layout.quads);
   min_length.resize(tm.edges.size(), 0);
   bool raised = false;
-  for (int e : zero_edges_around(tm, layout, bad, x, rings)) raised = raised || min_length[e] < 1, min_length[e] = 1;
+  for (int e : zero_edges_around(tm, layout, bad, x, rings)) {
+    raised = raised || min_length[e] < 1;
+    min_length[e] = std::max<int64_t>(min_length[e], 1);
+  }
   std::vector<char> bad_cell(tm.cells.size(), 0);
   for (size_t q = 0; q < bad.size(); ++q) bad_cell[layout.quad_cell[q]] |= bad[q];
   for (const PinchedCell& pinched : pinched_cells(tm))
