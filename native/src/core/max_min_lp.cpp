@@ -26,8 +26,10 @@ struct Candidate {
 };
 
 // The candidates of the octagon (corners, sides) in their order, each judged by all terms: the
-// first strictly best one.
-Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon) {
+// first strictly best one. `ceiling`: no point's worst term exceeds it, so the first candidate that
+// reaches it is that one and the enumeration ends there.
+Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
+                         double ceiling = std::numeric_limits<double>::infinity()) {
   const size_t m = c.size();
   const Vec2(&corner)[8] = octagon.corner;
   const Vec2(&side)[8] = octagon.side;
@@ -58,13 +60,16 @@ Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& 
       }
     return true;
   };
+  // True once the best reaches the ceiling.
   auto consider = [&](const Vec2& d) {
-    if (!beats_best(d)) return;
+    if (!beats_best(d)) return false;
     best_value = worst(d);
     best = d;
+    return best_value >= ceiling;
   };
+  if (best_value >= ceiling) return {best, best_value};
   for (int k = 0; k < 8; ++k) {
-    consider(corner[k]);
+    if (consider(corner[k])) return {best, best_value};
     const Vec2 a = corner[(k + 7) % 8], b = corner[k];
     for (size_t i = 0; i < m; ++i)
       for (size_t j = i + 1; j < m; ++j) {
@@ -72,7 +77,7 @@ Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& 
         const double slope = dg.dot(b - a);
         if (std::abs(slope) < 1e-14) continue;
         const double s = -(c[i] - c[j] + dg.dot(a)) / slope;
-        if (s >= 0 && s <= 1) consider(a + s * (b - a));
+        if (s >= 0 && s <= 1 && consider(a + s * (b - a))) return {best, best_value};
       }
   }
   for (size_t i = 0; i < m; ++i)
@@ -84,7 +89,7 @@ Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& 
         if (std::abs(det) < 1e-14) continue;
         const double b0 = c[j] - c[i], b1 = c[l] - c[i];
         const Vec2 d((b0 * r1.y() - r0.y() * b1) / det, (r0.x() * b1 - b0 * r1.x()) / det);
-        if (inside(d)) consider(d);
+        if (inside(d) && consider(d)) return {best, best_value};
       }
     }
   return {best, best_value};
@@ -123,11 +128,21 @@ bool constant_term_at(const std::vector<double>& c, const std::vector<Vec2>& g, 
   return false;
 }
 
+// The least constant term: no point's worst term exceeds it (infinity without one).
+double least_constant_term(const std::vector<double>& c, const std::vector<Vec2>& g) {
+  double least = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < c.size(); ++i)
+    if (g[i].isZero()) least = std::min(least, c[i]);
+  return least;
+}
+
 }  // namespace
 
 // The optimum over the terms that can be the worst (O(k^3) for k of them instead of m) is the
-// optimum of all terms where it is unique. Where a constant term is the worst, every candidate is
-// judged again in the full order, so the answer is always that of the full enumeration.
+// optimum of all terms where it is unique. Where a constant term may be the worst, the candidates
+// are judged again in the full order, so the answer is always that of the full enumeration; when
+// the optimum is exactly the least constant term, no candidate can beat the first that reaches it,
+// and the enumeration ends there.
 Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& g, const Vec2& centre, double radius) {
   const Octagon octagon(centre, radius);
   thread_local std::vector<double> kept_c;
@@ -135,7 +150,8 @@ Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& 
   keep_terms_that_can_be_worst(c, g, octagon, kept_c, kept_g);
   const Candidate fast = best_candidate(kept_c, kept_g, octagon);
   if (kept_c.size() == c.size() || !constant_term_at(c, g, fast.worst)) return fast.d;
-  return best_candidate(c, g, octagon).d;
+  const double ceiling = least_constant_term(c, g);
+  return best_candidate(c, g, octagon, fast.worst == ceiling ? ceiling : std::numeric_limits<double>::infinity()).d;
 }
 
 double maximize_worst_term_1d(const std::vector<double>& c, const std::vector<double>& g) {
