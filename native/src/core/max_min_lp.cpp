@@ -102,7 +102,8 @@ Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& 
 void keep_terms_that_can_be_worst(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
                                   std::vector<double>& kept_c, std::vector<Vec2>& kept_g) {
   const size_t m = c.size();
-  std::vector<double> least(m);
+  thread_local std::vector<double> least;
+  least.resize(m);
   double bound = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < m; ++i) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;

@@ -60,6 +60,7 @@ bool raise_bounds_where_layout_folds(const ComponentState& state, const std::vec
   const TMesh& tm = state.traced->tmesh;
   const LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, tm, x, quiet, false);
   const std::vector<char> bad = non_manifold_quads(layout.quads);
+  if (std::find(bad.begin(), bad.end(), 1) == bad.end()) return false;
   min_length.resize(tm.edges.size(), 0);
   bool raised = false;
   for (int e : zero_edges_around(tm, layout, bad, x, rings)) {
