@@ -102,13 +102,15 @@ Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& 
 void keep_terms_that_can_be_worst(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
                                   std::vector<double>& kept_c, std::vector<Vec2>& kept_g) {
   const size_t m = c.size();
+  Vec2 wider[8];
+  for (int k = 0; k < 8; ++k) wider[k] = octagon.centre + (1 + 1e-6) * (octagon.corner[k] - octagon.centre);
   thread_local std::vector<double> least;
   least.resize(m);
   double bound = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < m; ++i) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const Vec2& corner : octagon.corner) {
-      const double v = c[i] + g[i].dot(octagon.centre + (1 + 1e-6) * (corner - octagon.centre));
+    for (const Vec2& corner : wider) {
+      const double v = c[i] + g[i].dot(corner);
       lo = std::min(lo, v), hi = std::max(hi, v);
     }
     least[i] = lo;
@@ -120,16 +122,9 @@ void keep_terms_that_can_be_worst(const std::vector<double>& c, const std::vecto
     if (!(least[i] > bound + margin)) kept_c.push_back(c[i]), kept_g.push_back(g[i]);
 }
 
-// Whether a term that does not depend on d (the corner of a quad opposite the moving vertex) is
-// within a margin of `worst`: then the optimum may be a plateau, where the order of the candidates
-// decides which point is returned.
-bool constant_term_at(const std::vector<double>& c, const std::vector<Vec2>& g, double worst) {
-  for (size_t i = 0; i < c.size(); ++i)
-    if (g[i].isZero() && c[i] <= worst + 1e-9 * (1 + std::abs(worst))) return true;
-  return false;
-}
-
-// The least constant term: no point's worst term exceeds it (infinity without one).
+// The least term that does not depend on d (the corner of a quad opposite the moving vertex;
+// infinity without one): no point's worst term exceeds it. Where it is within a margin of the
+// optimum, the optimum may be a plateau, on which the order of the candidates decides.
 double least_constant_term(const std::vector<double>& c, const std::vector<Vec2>& g) {
   double least = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < c.size(); ++i)
@@ -150,8 +145,9 @@ Vec2 maximize_worst_term(const std::vector<double>& c, const std::vector<Vec2>& 
   thread_local std::vector<Vec2> kept_g;
   keep_terms_that_can_be_worst(c, g, octagon, kept_c, kept_g);
   const Candidate fast = best_candidate(kept_c, kept_g, octagon);
-  if (kept_c.size() == c.size() || !constant_term_at(c, g, fast.worst)) return fast.d;
+  if (kept_c.size() == c.size()) return fast.d;
   const double ceiling = least_constant_term(c, g);
+  if (!(ceiling <= fast.worst + 1e-9 * (1 + std::abs(fast.worst)))) return fast.d;
   return best_candidate(c, g, octagon, fast.worst == ceiling ? ceiling : std::numeric_limits<double>::infinity()).d;
 }
 

@@ -452,25 +452,29 @@ QuantizationResult quantize(const TMesh& tmesh, const QuantizationOptions& optio
   return quantizer.run();
 }
 
+namespace {
+
+// The side of cell c that opens it (PinchedCell), or -1 when no node is at two of its corners.
+int side_to_open(const CellSystem& sys, int c) {
+  std::array<int, 4> corner{};
+  for (int s = 0; s < 4; ++s) corner[s] = sys.occ_start_node[sys.side_begin(c, s)];
+  for (int s = 0; s < 4; ++s)
+    if (corner[s] == corner[(s + 1) % 4]) return s;
+  if (corner[0] != corner[2] && corner[1] != corner[3]) return -1;
+  const TMesh& tmesh = sys.tmesh();
+  double length[2] = {0, 0};
+  for (int s = 0; s < 2; ++s)
+    for (int e : tmesh.cells[c].sides[s]) length[s] += tmesh.edges[e].length;
+  return length[1] > length[0] ? 1 : 0;
+}
+
+}  // namespace
+
 std::vector<PinchedCell> pinched_cells(const TMesh& tmesh) {
   const CellSystem sys(tmesh);
   std::vector<PinchedCell> pinched;
-  for (int c = 0; c < sys.num_cells(); ++c) {
-    std::array<int, 4> corner{};
-    for (int s = 0; s < 4; ++s) corner[s] = sys.occ_start_node[sys.side_begin(c, s)];
-    for (int s = 0; s < 4; ++s)
-      if (corner[s] == corner[(s + 1) % 4]) {
-        pinched.push_back({c, s});
-        break;
-      }
-    if (!pinched.empty() && pinched.back().cell == c) continue;
-    if (corner[0] == corner[2] || corner[1] == corner[3]) {
-      double length[2] = {0, 0};
-      for (int s = 0; s < 2; ++s)
-        for (int e : tmesh.cells[c].sides[s]) length[s] += tmesh.edges[e].length;
-      pinched.push_back({c, length[1] > length[0] ? 1 : 0});
-    }
-  }
+  for (int c = 0; c < sys.num_cells(); ++c)
+    if (const int side = side_to_open(sys, c); side >= 0) pinched.push_back({c, side});
   return pinched;
 }
 
