@@ -799,6 +799,38 @@ TEST(SeamlessMapMeshes, EveryManifoldMeshIsSeamlessAndRegular) {
   }
 }
 
+// Feature and boundary edges of p (those the map keeps as isolines: not dropped) in *features;
+// returns how many of their halfedges have no constant coordinate in their chart.
+int edges_off_isolines(const Prepared& p, const SeamlessMap& m, int* features) {
+  const double diag = param_diagonal(m.param);
+  std::vector<char> dropped(p.mesh.num_edges(), 0);
+  for (int e : m.stats.dropped_isoline_edges) dropped[e] = 1;
+  int off = 0;
+  *features = 0;
+  for (int e = 0; e < p.mesh.num_edges(); ++e) {
+    if (!(p.field.feature_edge[e] || p.mesh.is_boundary_edge(e)) || dropped[e]) continue;
+    ++*features;
+    // In both adjacent charts one coordinate is constant along the edge.
+    for (int h : {p.mesh.edge_halfedge[e], p.mesh.opposite[p.mesh.edge_halfedge[e]]}) {
+      if (h < 0) continue;
+      const Vec2 d = m.param.corner(h / 3, (h % 3 + 1) % 3) - m.param.corner(h / 3, h % 3);
+      off += std::min(std::abs(d.x()), std::abs(d.y())) > 1e-9 * diag;
+    }
+  }
+  return off;
+}
+
+void expect_regular_with_features_on_isolines(const Prepared& p, const SeamlessMap& m) {
+  int features = 0;
+  EXPECT_EQ(edges_off_isolines(p, m, &features), 0);
+  EXPECT_GT(features, 100);
+  EXPECT_LE(m.stats.dropped_isolines * 100, features);  // at most 1%
+  EXPECT_EQ(m.stats.flipped_triangles, 0);
+  EXPECT_EQ(m.stats.degenerate_triangles, 0);
+  EXPECT_EQ(m.stats.winding_defects, 0);
+  EXPECT_LE(m.stats.max_transition_residual, 1e-9 * param_diagonal(m.param));
+}
+
 TEST(SeamlessMapMeshes, FeatureEdgesLieOnIsolines) {
   for (const std::string name : {"fandisk.obj", "block.obj", "joint.obj", "wingnut.obj"}) {
     SCOPED_TRACE(name);
@@ -809,30 +841,38 @@ TEST(SeamlessMapMeshes, FeatureEdgesLieOnIsolines) {
     Timer t;
     const SeamlessMap m = compute_seamless_map(p.mesh, p.field, p.cut, o, progress);
     print_stats(name + " (sharp 40)", m, t.seconds());
-    const double diag = param_diagonal(m.param);
-    // Edges whose isolines would collapse a triangle are left free (and counted).
-    std::vector<char> dropped(p.mesh.num_edges(), 0);
-    for (int e : m.stats.dropped_isoline_edges) dropped[e] = 1;
-    int features = 0, off = 0;
-    for (int e = 0; e < p.mesh.num_edges(); ++e) {
-      if (!(p.field.feature_edge[e] || p.mesh.is_boundary_edge(e)) || dropped[e]) continue;
-      ++features;
-      // In both adjacent charts one coordinate is constant along the edge.
-      for (int h : {p.mesh.edge_halfedge[e], p.mesh.opposite[p.mesh.edge_halfedge[e]]}) {
-        if (h < 0) continue;
-        const Vec2 d = m.param.corner(h / 3, (h % 3 + 1) % 3) - m.param.corner(h / 3, h % 3);
-        off += std::min(std::abs(d.x()), std::abs(d.y())) > 1e-9 * diag;
-      }
-    }
-    std::cout << "[seamless] " << name << ": " << features << " feature/boundary edges on isolines, "
-              << m.stats.dropped_isolines << " left free\n";
-    EXPECT_GT(features, 100);
-    EXPECT_LE(m.stats.dropped_isolines * 100, features);  // at most 1%
-    EXPECT_EQ(off, 0);
-    EXPECT_EQ(m.stats.flipped_triangles, 0);
-    EXPECT_EQ(m.stats.degenerate_triangles, 0);
-    EXPECT_EQ(m.stats.winding_defects, 0);
-    EXPECT_LE(m.stats.max_transition_residual, 1e-9 * diag);
+    std::cout << "[seamless] " << name << ": " << m.stats.dropped_isolines << " isoline edges left free\n";
+    expect_regular_with_features_on_isolines(p, m);
+  }
+}
+
+TEST(SeamlessMapMeshes, SharedCoordinatesMoveWhereLocalRegionsCannot) {
+  // With sharp edges at 60 degrees, local regions leave folds on these CAD parts that need a
+  // feature curve's constant coordinate (one variable along the whole curve) or a cut arc's end
+  // to move. The rounds that move such shared variables repair them without the global solve, and
+  // the features stay on isolines.
+  for (const std::string name : {"fandisk.obj", "mnf07HeadFem_rem_rem_p.obj"}) {
+    SCOPED_TRACE(name);
+    const Prepared p = prepare(name, 60, 2000);
+    SeamlessMapOptions local;
+    local.edge_length = p.edge_length;
+    local.region_stagnation_rounds = 1;  // as the pipeline: no round over most of the mesh in vain
+    local.field_frame_solve = false;
+    local.move_shared_coordinates = false;
+    Progress progress;
+    const SeamlessMap stuck = compute_seamless_map(p.mesh, p.field, p.cut, local, progress);
+    const SeamlessMapStats& s0 = stuck.stats;
+    EXPECT_GT(s0.flipped_triangles + s0.degenerate_triangles + s0.winding_defects, 0);
+    EXPECT_FALSE(s0.moved_shared_coordinates);
+
+    SeamlessMapOptions shared = local;
+    shared.move_shared_coordinates = true;
+    Timer t;
+    const SeamlessMap m = compute_seamless_map(p.mesh, p.field, p.cut, shared, progress);
+    print_stats(name + " (sharp 60, shared coordinates)", m, t.seconds());
+    EXPECT_TRUE(m.stats.moved_shared_coordinates);
+    EXPECT_EQ(m.stats.field_frame_solves, 0);
+    expect_regular_with_features_on_isolines(p, m);
   }
 }
 

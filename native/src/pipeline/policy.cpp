@@ -283,6 +283,7 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
   if (!field_cancelled_pairs(state)) return;
   options.count_stagnation_rounds = kCancelledPairsStagnantRounds;
   options.field_frame_solve = false;
+  options.move_shared_coordinates = false;
 }
 
 namespace {

@@ -71,6 +71,8 @@ struct ParametrizationProblem::System {
   Eigen::CholmodDecomposition<SpMat, Eigen::Lower> cholesky;
   bool factorized = false;
   std::vector<int> var_face_start, var_face;  // free variable -> faces whose corners use it
+  std::vector<char> shared_var;               // free variables in the coordinates of more than one vertex (see
+                                              // Solver::move_shared_coordinates)
   std::vector<char> forced_degenerate;        // #F
 
  private:
@@ -95,7 +97,7 @@ struct ParametrizationProblem::System {
   // Appends one penalty row per linear constraint from row `row` on; returns the next row.
   int add_penalty_rows(const ParametrizationProblem& problem, int row, std::vector<Triplet>& triplets,
                        std::vector<double>& rhs) const;
-  // Fills var_face_start / var_face (free variable -> faces).
+  // Fills var_face_start / var_face (free variable -> faces) and shared_var.
   void index_variable_faces(const ParametrizationProblem& problem);
 };
 
@@ -427,12 +429,19 @@ int ParametrizationProblem::System::add_penalty_rows(const ParametrizationProble
 void ParametrizationProblem::System::index_variable_faces(const ParametrizationProblem& problem) {
   const int nf = problem.mesh_.num_faces();
   std::vector<std::pair<int, int>> pairs;  // (var, face)
+  std::vector<int> first_vertex(num_free, -1);
+  shared_var.assign(num_free, 0);
   for (int f = 0; f < nf; ++f) {
     const size_t first = pairs.size();
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 2; ++a) {
         const int v = wedge_var(3 * f + k, a);
-        for (int i = form_start[v]; i < form_start[v + 1]; ++i) pairs.push_back({form_var[i], f});
+        for (int i = form_start[v]; i < form_start[v + 1]; ++i) {
+          const int var = form_var[i], vertex = problem.mesh_.F(f, k);
+          pairs.push_back({var, f});
+          if (first_vertex[var] < 0) first_vertex[var] = vertex;
+          shared_var[var] = shared_var[var] || first_vertex[var] != vertex;
+        }
       }
     std::sort(pairs.begin() + static_cast<long>(first), pairs.end());
     pairs.erase(std::unique(pairs.begin() + static_cast<long>(first), pairs.end()), pairs.end());
@@ -607,8 +616,12 @@ class ParametrizationProblem::Solver {
   bool needs_repair(const Census& initial) const;
   // More bad faces at the start than the caller lets the repair take on.
   bool declines_repair(const Census& initial) const;
-  // The repair rounds (local, global in the field's frame, local again), then re-linearization.
+  // The repair rounds (local; local again moving shared coordinates; global in the field's frame
+  // and local again), then re-linearization.
   void repair();
+  // Lets the local repair move shared coordinates (System::shared_var) from now on; true when
+  // bad faces are left and some shared coordinate reaches one of them.
+  bool move_shared_coordinates();
   // One global solve in the field's frame; true when local repair rounds should follow.
   bool field_frame_solve();
   // Local repair rounds (at most max_rounds) from the current bad faces; ends at the best pose.
@@ -641,6 +654,9 @@ class ParametrizationProblem::Solver {
   Eigen::VectorXd solve_region(const std::vector<char>& in_region, const std::vector<char>& active,
                                const Eigen::VectorXd& x, const Census& cs, int strategy, double pb, double pe,
                                QPResult::Status* status);
+  // Whether variable v moves in a region: all its faces lie in it (or, a shared coordinate once
+  // move_shared_ is set, one of them does).
+  bool moves_in_region(int v, const std::vector<char>& in_region) const;
   // The region's variables and the faces they reach that get constraints.
   RegionQP select_region(const std::vector<char>& in_region, const std::vector<char>& active);
   // Rotation of face g's ideal shape that best fits its shape in x.
@@ -696,6 +712,7 @@ class ParametrizationProblem::Solver {
   std::vector<char> region_, active_;
   std::vector<int> rings_;     // #F per-face ring count (see repair)
   std::vector<char> touched_;  // faces that were bad at some point
+  bool move_shared_ = false;   // regions move shared coordinates (see move_shared_coordinates)
   int first_rings_ = 0, max_rings_ = 0, rounds_ = 1;
 };
 
@@ -965,17 +982,35 @@ void ParametrizationProblem::Solver::repair() {
   rings_.assign(nf_, 0);
   rounds_ = std::max(1, options_.max_repair_rounds);
   touched_.assign(nf_, 0);
-  for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1 && (st_.finished_by_caller || !field_frame_solve())) break;
-    // After the global solve, the local repair gets half the rounds again.
-    local_repair(pass == 0 ? rounds_ : std::max(1, rounds_ / 2));
-  }
+  // Each escalation is followed by half the rounds again.
+  local_repair(rounds_);
+  if (!st_.finished_by_caller && move_shared_coordinates()) local_repair(std::max(1, rounds_ / 2));
+  if (!st_.finished_by_caller && field_frame_solve()) local_repair(std::max(1, rounds_ / 2));
   // Re-linearize around the faces that were repaired.
   if (options_.regularity != RegularityMode::AllFaces) {
     region_ = touched_;
     dilate(region_, std::max(0, options_.ring_size));
   }
   relinearize();
+}
+
+// A local region moves only the variables whose faces all lie in it. After the elimination one
+// variable can be in the coordinates of many vertices: the constant coordinate of an isoline
+// along a whole feature curve or boundary, or a wedge at a cut arc's end, in terms of which the
+// arc's far side is written. Faces whose flip needs such a variable to move stay bad in every
+// local region (fandisk and mnf07 with sharp edges at 60 degrees: 2 and 5 such flips; the global solve
+// then took 2 and 6 s). From here on a region moves a shared variable as soon as it holds one of
+// its faces, and every face the variable reaches is constrained.
+bool ParametrizationProblem::Solver::move_shared_coordinates() {
+  if (current_.bad() == 0 || move_shared_ || !options_.move_shared_coordinates) return false;
+  std::vector<char> near_bad(nf_, 0);
+  add_bad(current_, near_bad, max_rings_, nullptr);
+  for (int v = 0; v < sys_.num_free; ++v) {
+    if (!sys_.shared_var[v]) continue;
+    for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1]; ++i)
+      if (near_bad[sys_.var_face[i]]) return move_shared_ = st_.moved_shared_coordinates = true;
+  }
+  return false;
 }
 
 // The local repair left bad faces (typically a flip next to a wound vertex, which no local
@@ -1181,23 +1216,31 @@ Eigen::VectorXd ParametrizationProblem::Solver::solve_region(const std::vector<c
 RegionQP ParametrizationProblem::Solver::select_region(const std::vector<char>& in_region,
                                                        const std::vector<char>& active) {
   // Variables used only by region faces move; the active faces they reach are constrained.
+  // A shared coordinate moved by move_shared_ constrains every face it reaches.
   RegionQP rq;
   rq.local.assign(sys_.num_free, -1);
-  for (int v = 0; v < sys_.num_free; ++v) {
-    bool inside = sys_.var_face_start[v] < sys_.var_face_start[v + 1];
-    for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1] && inside; ++i)
-      inside = in_region[sys_.var_face[i]];
-    if (inside) rq.local[v] = static_cast<int>(rq.vars.size()), rq.vars.push_back(v);
-  }
+  for (int v = 0; v < sys_.num_free; ++v)
+    if (moves_in_region(v, in_region)) rq.local[v] = static_cast<int>(rq.vars.size()), rq.vars.push_back(v);
   std::vector<char> constrained(nf_, 0);
-  for (int v : rq.vars)
+  for (int v : rq.vars) {
+    const bool shared = move_shared_ && sys_.shared_var[v];
     for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1]; ++i) {
       const int f = sys_.var_face[i];
-      if (active[f] && !constrained[f] && !sys_.forced_degenerate[f]) constrained[f] = 1, rq.faces.push_back(f);
+      if ((active[f] || shared) && !constrained[f] && !sys_.forced_degenerate[f])
+        constrained[f] = 1, rq.faces.push_back(f);
     }
+  }
   st_.max_region_faces = std::max(st_.max_region_faces, static_cast<int>(rq.faces.size()));
   st_.max_qp_variables = std::max(st_.max_qp_variables, static_cast<int>(rq.vars.size()));
   return rq;
+}
+
+bool ParametrizationProblem::Solver::moves_in_region(int v, const std::vector<char>& in_region) const {
+  const int begin = sys_.var_face_start[v], end = sys_.var_face_start[v + 1];
+  int inside = 0;
+  for (int i = begin; i < end; ++i) inside += in_region[sys_.var_face[i]] != 0;
+  if (move_shared_ && sys_.shared_var[v]) return inside > 0;
+  return begin < end && inside == end - begin;
 }
 
 Vec2 ParametrizationProblem::Solver::best_fit(const Eigen::VectorXd& x, int g) const {
@@ -1468,6 +1511,7 @@ ParametrizationSolution ParametrizationProblem::solve_with_relinearization(Param
     total.qp_by_ipopt += s.qp_by_ipopt;
     total.repair_rounds += s.repair_rounds;
     total.field_frame_solves += s.field_frame_solves;
+    total.moved_shared_coordinates = total.moved_shared_coordinates || s.moved_shared_coordinates;
     total.relinearizations += s.relinearizations;
     total.seconds_assembly += s.seconds_assembly;
     total.seconds_cholesky += s.seconds_cholesky;

@@ -78,6 +78,10 @@ struct ParametrizationSolveOptions {
                                                // solve in the field's frame, then max_repair_rounds / 2 more rounds
   bool field_frame_solve = true;               // with winding_repair: the global solve above (false: the
                                                // local repair only, for callers with a fallback)
+  bool move_shared_coordinates = true;         // when the local repair leaves bad faces: max_repair_rounds / 2
+                                               // more rounds whose regions also move the variables shared
+                                               // by many vertices (isolines, cut arcs; false: not, for
+                                               // callers with a fallback)
   bool skip_repair_if_forced = false;          // no repair where the hard constraints make faces
                                                // degenerate: no map can be regular then (for callers
                                                // that use a regular map or none)
@@ -109,11 +113,12 @@ struct ParametrizationSolveStats {
   int ipopt_solves = 0, ipopt_iterations = 0;  // quadratic programs solved (quadratic_program.h), iterations
   int qp_by_ipopt = 0;                         // of them finished by Ipopt (the own method did not converge)
   int repair_rounds = 0, relinearizations = 0;
-  std::vector<int> bad_after_round;      // bad faces of the kept pose after each repair round
-  std::vector<double> seconds_of_round;  // time of each repair round
-  int field_frame_solves = 0;            // global solves with every face in its field-frame sectors
-  bool finished_by_caller = false;       // the repair ended where options.caller_finishes said so
-  bool repair_declined = false;          // not repaired: more bad faces than max_bad_share_to_repair
+  std::vector<int> bad_after_round;       // bad faces of the kept pose after each repair round
+  std::vector<double> seconds_of_round;   // time of each repair round
+  int field_frame_solves = 0;             // global solves with every face in its field-frame sectors
+  bool moved_shared_coordinates = false;  // regions moved shared coordinates (see move_shared_coordinates)
+  bool finished_by_caller = false;        // the repair ended where options.caller_finishes said so
+  bool repair_declined = false;           // not repaired: more bad faces than max_bad_share_to_repair
   int max_region_faces = 0, max_qp_variables = 0;
   int non_integer_pivots = 0, redundant_constraints = 0, inconsistent_constraints = 0;
   double seconds_assembly = 0, seconds_cholesky = 0, seconds_ipopt = 0;

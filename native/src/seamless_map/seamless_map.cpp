@@ -126,6 +126,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   solve_options.count_stagnation_rounds = options.count_stagnation_rounds;
   solve_options.winding_repair = options.winding_repair;
   solve_options.field_frame_solve = options.field_frame_solve;
+  solve_options.move_shared_coordinates = options.move_shared_coordinates;
   solve_options.max_bad_share_to_repair = options.max_bad_share_to_repair;
   ParametrizationSolution solution = problem->solve(solve_options, progress);
 
@@ -150,6 +151,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   st.qp_by_ipopt = s.qp_by_ipopt;
   st.repair_rounds = s.repair_rounds;
   st.field_frame_solves = s.field_frame_solves;
+  st.moved_shared_coordinates = s.moved_shared_coordinates;
   st.repair_declined = s.repair_declined;
   st.max_region_faces = s.max_region_faces;
   st.repair_bad_faces = s.bad_after_round;

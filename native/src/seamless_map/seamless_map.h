@@ -12,15 +12,16 @@
 namespace qgp {
 
 struct SeamlessMapOptions {
-  double edge_length = 1;              // target quad edge length in model units: 1 uv unit = edge_length
-  std::vector<double> face_size;       // #F multiples of edge_length (sizing/sizing.h); empty: uniform
-  bool regularity = true;              // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
-  int max_repair_rounds = 24;          // Ipopt repair rounds at most (see ParametrizationSolveOptions)
-  int region_stagnation_rounds = 0;    // see ParametrizationSolveOptions
-  int count_stagnation_rounds = 0;     // see ParametrizationSolveOptions
-  bool winding_repair = true;          // see ParametrizationSolveOptions
-  bool field_frame_solve = true;       // see ParametrizationSolveOptions
-  double max_bad_share_to_repair = 1;  // see ParametrizationSolveOptions
+  double edge_length = 1;               // target quad edge length in model units: 1 uv unit = edge_length
+  std::vector<double> face_size;        // #F multiples of edge_length (sizing/sizing.h); empty: uniform
+  bool regularity = true;               // repair flipped / degenerate triangles with Ipopt (off: Cholesky only)
+  int max_repair_rounds = 24;           // Ipopt repair rounds at most (see ParametrizationSolveOptions)
+  int region_stagnation_rounds = 0;     // see ParametrizationSolveOptions
+  int count_stagnation_rounds = 0;      // see ParametrizationSolveOptions
+  bool winding_repair = true;           // see ParametrizationSolveOptions
+  bool field_frame_solve = true;        // see ParametrizationSolveOptions
+  bool move_shared_coordinates = true;  // see ParametrizationSolveOptions
+  double max_bad_share_to_repair = 1;   // see ParametrizationSolveOptions
 };
 
 struct SeamlessMapStats {
@@ -38,20 +39,22 @@ struct SeamlessMapStats {
   int dropped_isolines = 0;   // feature edges left free (see select_isolines)
   std::vector<int> dropped_isoline_edges;
   int ipopt_solves = 0;
-  int qp_by_ipopt = 0;                 // repair solves Ipopt finished (quadratic_program.h)
-  int repair_rounds = 0;               // Ipopt repair rounds (0: the Cholesky optimum was regular)
-  int field_frame_solves = 0;          // global solves in the field frame after a failed local repair
-  bool repair_declined = false;        // not repaired: too many bad triangles at the start (options)
-  int max_region_faces = 0;            // most faces constrained in one Ipopt solve
-  std::vector<int> repair_bad_faces;   // bad triangles (flipped, degenerate, wound) after each repair round
-  std::vector<double> repair_seconds;  // and the time of each round
-  double min_area_ratio = 0;           // min parametric / ideal (field-aligned) triangle area
+  int qp_by_ipopt = 0;                    // repair solves Ipopt finished (quadratic_program.h)
+  int repair_rounds = 0;                  // Ipopt repair rounds (0: the Cholesky optimum was regular)
+  int field_frame_solves = 0;             // global solves in the field frame after a failed local repair
+  bool moved_shared_coordinates = false;  // repair rounds moved shared coordinates (after a failed local repair)
+  bool repair_declined = false;           // not repaired: too many bad triangles at the start (options)
+  int max_region_faces = 0;               // most faces constrained in one Ipopt solve
+  std::vector<int> repair_bad_faces;      // bad triangles (flipped, degenerate, wound) after each repair round
+  std::vector<double> repair_seconds;     // and the time of each round
+  double min_area_ratio = 0;              // min parametric / ideal (field-aligned) triangle area
   double seconds_cholesky = 0, seconds_ipopt = 0;
 };
 // Report object `seamless.components[i]`.
 QGP_JSON_FIELDS(SeamlessMapStats, flipped_triangles, degenerate_triangles, winding_defects, max_transition_residual,
                 energy, ipopt_iterations, flipped_before_ipopt, isoline_edges, dropped_isolines, repair_rounds,
-                field_frame_solves, repair_declined, min_area_ratio, repair_bad_faces, repair_seconds, qp_by_ipopt)
+                field_frame_solves, moved_shared_coordinates, repair_declined, min_area_ratio, repair_bad_faces,
+                repair_seconds, qp_by_ipopt)
 
 struct SeamlessMap {
   Parametrization param;  // rotation[] and is_cut from the cut graph
