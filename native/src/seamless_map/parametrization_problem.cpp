@@ -72,7 +72,7 @@ struct ParametrizationProblem::System {
   bool factorized = false;
   std::vector<int> var_face_start, var_face;  // free variable -> faces whose corners use it
   std::vector<char> shared_var;               // free variables in the coordinates of more than one vertex (see
-                                              // Solver::move_shared_coordinates)
+                                              // Solver::start_moving_shared_coordinates)
   std::vector<char> forced_degenerate;        // #F
 
  private:
@@ -621,7 +621,7 @@ class ParametrizationProblem::Solver {
   void repair();
   // Lets the local repair move shared coordinates (System::shared_var) from now on; true when
   // bad faces are left and some shared coordinate reaches one of them.
-  bool move_shared_coordinates();
+  bool start_moving_shared_coordinates();
   // One global solve in the field's frame; true when local repair rounds should follow.
   bool field_frame_solve();
   // Local repair rounds (at most max_rounds) from the current bad faces; ends at the best pose.
@@ -712,7 +712,7 @@ class ParametrizationProblem::Solver {
   std::vector<char> region_, active_;
   std::vector<int> rings_;     // #F per-face ring count (see repair)
   std::vector<char> touched_;  // faces that were bad at some point
-  bool move_shared_ = false;   // regions move shared coordinates (see move_shared_coordinates)
+  bool move_shared_ = false;   // regions move shared coordinates (see start_moving_shared_coordinates)
   int first_rings_ = 0, max_rings_ = 0, rounds_ = 1;
 };
 
@@ -984,7 +984,7 @@ void ParametrizationProblem::Solver::repair() {
   touched_.assign(nf_, 0);
   // Each escalation is followed by half the rounds again.
   local_repair(rounds_);
-  if (!st_.finished_by_caller && move_shared_coordinates()) local_repair(std::max(1, rounds_ / 2));
+  if (!st_.finished_by_caller && start_moving_shared_coordinates()) local_repair(std::max(1, rounds_ / 2));
   if (!st_.finished_by_caller && field_frame_solve()) local_repair(std::max(1, rounds_ / 2));
   // Re-linearize around the faces that were repaired.
   if (options_.regularity != RegularityMode::AllFaces) {
@@ -1001,7 +1001,7 @@ void ParametrizationProblem::Solver::repair() {
 // local region (fandisk and mnf07 with sharp edges at 60 degrees: 2 and 5 such flips; the global solve
 // then took 2 and 6 s). From here on a region moves a shared variable as soon as it holds one of
 // its faces, and every face the variable reaches is constrained.
-bool ParametrizationProblem::Solver::move_shared_coordinates() {
+bool ParametrizationProblem::Solver::start_moving_shared_coordinates() {
   if (current_.bad() == 0 || move_shared_ || !options_.move_shared_coordinates) return false;
   std::vector<char> near_bad(nf_, 0);
   add_bad(current_, near_bad, max_rings_, nullptr);

@@ -116,7 +116,7 @@ struct ParametrizationSolveStats {
   std::vector<int> bad_after_round;       // bad faces of the kept pose after each repair round
   std::vector<double> seconds_of_round;   // time of each repair round
   int field_frame_solves = 0;             // global solves with every face in its field-frame sectors
-  bool moved_shared_coordinates = false;  // regions moved shared coordinates (see move_shared_coordinates)
+  bool moved_shared_coordinates = false;  // regions moved shared coordinates (see the option above)
   bool finished_by_caller = false;        // the repair ended where options.caller_finishes said so
   bool repair_declined = false;           // not repaired: more bad faces than max_bad_share_to_repair
   int max_region_faces = 0, max_qp_variables = 0;
