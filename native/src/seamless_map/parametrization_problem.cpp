@@ -657,6 +657,8 @@ class ParametrizationProblem::Solver {
   // Whether variable v moves in a region: all its faces lie in it (or, a shared coordinate once
   // move_shared_ is set, one of them does).
   bool moves_in_region(int v, const std::vector<char>& in_region) const;
+  // Variable v is shared and regions move shared variables now.
+  bool moves_shared(int v) const { return move_shared_ && sys_.shared_var[v]; }
   // The region's variables and the faces they reach that get constraints.
   RegionQP select_region(const std::vector<char>& in_region, const std::vector<char>& active);
   // Rotation of face g's ideal shape that best fits its shape in x.
@@ -842,6 +844,7 @@ void ParametrizationProblem::Solver::write_output() {
   st_.min_area_ratio = current_.min_ratio;
   st_.energy = problem_.field_energy(p);
   st_.constraint_violation = problem_.constraint_violation(p);
+  st_.moved_shared_coordinates = move_shared_;
 }
 
 FaceState ParametrizationProblem::Solver::classify_face(const Eigen::VectorXd& x, int f, double* ratio) const {
@@ -1008,7 +1011,7 @@ bool ParametrizationProblem::Solver::start_moving_shared_coordinates() {
   for (int v = 0; v < sys_.num_free; ++v) {
     if (!sys_.shared_var[v]) continue;
     for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1]; ++i)
-      if (near_bad[sys_.var_face[i]]) return move_shared_ = st_.moved_shared_coordinates = true;
+      if (near_bad[sys_.var_face[i]]) return move_shared_ = true;
   }
   return false;
 }
@@ -1223,7 +1226,7 @@ RegionQP ParametrizationProblem::Solver::select_region(const std::vector<char>& 
     if (moves_in_region(v, in_region)) rq.local[v] = static_cast<int>(rq.vars.size()), rq.vars.push_back(v);
   std::vector<char> constrained(nf_, 0);
   for (int v : rq.vars) {
-    const bool shared = move_shared_ && sys_.shared_var[v];
+    const bool shared = moves_shared(v);
     for (int i = sys_.var_face_start[v]; i < sys_.var_face_start[v + 1]; ++i) {
       const int f = sys_.var_face[i];
       if ((active[f] || shared) && !constrained[f] && !sys_.forced_degenerate[f])
@@ -1236,11 +1239,12 @@ RegionQP ParametrizationProblem::Solver::select_region(const std::vector<char>& 
 }
 
 bool ParametrizationProblem::Solver::moves_in_region(int v, const std::vector<char>& in_region) const {
+  // A shared variable moves at its first face inside, any other stops at its first face outside.
+  const bool shared = moves_shared(v);
   const int begin = sys_.var_face_start[v], end = sys_.var_face_start[v + 1];
-  int inside = 0;
-  for (int i = begin; i < end; ++i) inside += in_region[sys_.var_face[i]] != 0;
-  if (move_shared_ && sys_.shared_var[v]) return inside > 0;
-  return begin < end && inside == end - begin;
+  for (int i = begin; i < end; ++i)
+    if ((in_region[sys_.var_face[i]] != 0) == shared) return shared;
+  return !shared && begin < end;
 }
 
 Vec2 ParametrizationProblem::Solver::best_fit(const Eigen::VectorXd& x, int g) const {
