@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -324,12 +325,12 @@ std::vector<char> sharp_tip_vertices(const TriMesh& mesh) {
   return tips;
 }
 
-Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress) {
+Quantized quantize_without_folds(const ComponentState& state, QuantizationResult first, Progress& progress) {
   const TMesh& tmesh = state.traced->tmesh;
   QuantizationOptions options;
-  options.scale = scale;
+  options.scale = first.scale;
   Quantized q;
-  q.result = quantize(tmesh, options, progress);
+  q.result = std::move(first);
   for (int round = 0; round < kMaxFoldRounds; ++round) {
     if (!raise_bounds_where_layout_folds(state, q.result.x, round, options.min_length)) break;
     q.result = quantize(tmesh, options, progress);
@@ -342,15 +343,23 @@ Quantized quantize_without_folds(const ComponentState& state, double scale, Prog
 
 namespace {
 
+// A quantization at `scale` without bounds (the start of quantize_without_folds), kept so that the
+// count search's best trial is not quantized again.
+QuantizationResult quantize_at_scale(const TMesh& tmesh, double scale, Progress& progress) {
+  QuantizationOptions options;
+  options.scale = scale;
+  return quantize(tmesh, options, progress);
+}
+
 struct CountTrial {
   double scale = 0;
   int64_t quads = 0;
+  std::shared_ptr<const QuantizationResult> result;  // none for the search's start before any trial
 };
 
 CountTrial quads_at_scale(const TMesh& tmesh, double scale, Progress& progress) {
-  QuantizationOptions options;
-  options.scale = scale;
-  return {scale, quantize(tmesh, options, progress).quads_expected};
+  auto result = std::make_shared<const QuantizationResult>(quantize_at_scale(tmesh, scale, progress));
+  return {scale, result->quads_expected, std::move(result)};
 }
 
 // The trials of one component's count search: the closest to the target, the largest scale that
@@ -420,7 +429,9 @@ Quantized quantize_to_count(const ComponentState& state, double scale, double ta
       fewest = search.fewest;
     }
   }
-  Quantized q = quantize_without_folds(state, search.best.scale, progress);
+  QuantizationResult closest =
+      search.best.result ? *search.best.result : quantize_at_scale(state.traced->tmesh, scale, progress);
+  Quantized q = quantize_without_folds(state, std::move(closest), progress);
   if (q.result.quads_expected == 0)  // its map and quads would be empty: fail before solving them
     throw Error(ErrorCode::StageFailed,
                 "quantization: the layout collapses to no quad at this density (the part is narrower than one "

@@ -154,7 +154,8 @@ bool seamless_map_serves(double solved_for, double edge_length);
 constexpr double kMaxTipAngleSum = M_PI;
 std::vector<char> sharp_tip_vertices(const TriMesh& mesh);
 
-// Greedy quantization of the component's T-mesh at `scale`. A valid quantization can still
+// The component's greedy quantization, from `first`, the T-mesh quantized at a scale without
+// bounds (the count search's closest trial, not quantized again). A valid quantization can still
 // collapse cells so that the layout folds (a regular point between two quads only, two quads on
 // both sides of one edge): the zero edges there, and in a widening ring of cells around, are kept
 // at length 1, a pinched cell there whose single quad repeats a node is kept 2 quads across
@@ -164,7 +165,7 @@ std::vector<char> sharp_tip_vertices(const TriMesh& mesh);
 // the part is thin or sharply curved), the zero edges around their cells are kept at 1 the same
 // way, up to kMaxFlipRounds times and kMaxFlipRings cells away; a round is kept only when it leaves
 // fewer flipped quads in a valid layout. The quads keep their size where that needs no collapse.
-Quantized quantize_without_folds(const ComponentState& state, double scale, Progress& progress);
+Quantized quantize_without_folds(const ComponentState& state, QuantizationResult first, Progress& progress);
 
 // Re-quantizations that move the scale toward a component's share of the quad count asked...
 constexpr int kMaxCountRounds = 8;
