@@ -54,6 +54,14 @@ struct Quantized {
   std::optional<std::array<int64_t, 2>> count_step;
   // The round baseline's rounded map: it is the integer-grid map of that quantization.
   std::optional<RoundedMap> rounded;
+  // The layout's quads of `result`, placed on the surface and untangled as quad extraction places
+  // them (greedy, where they form a valid mesh: the flip rounds judged them), so that extraction
+  // does not place them again.
+  struct PlacedLayout {
+    LayoutQuads layout;
+    UntangleStats untangle;
+  };
+  std::optional<PlacedLayout> placed_layout;
 };
 
 // Stage 4: the integer-grid map (1 unit = 1 quad).

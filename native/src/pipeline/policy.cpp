@@ -83,6 +83,7 @@ std::string quad_mesh_defects(const QuadTopology& t, int euler);
 // them, and which of them stay flipped against the input surface.
 struct LayoutFlips {
   LayoutQuads layout;
+  UntangleStats untangle;
   std::vector<char> flipped;  // per layout quad
   int count = 0;
   bool valid = false;  // a consistently oriented 2-manifold of the part's Euler characteristic
@@ -98,7 +99,7 @@ LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>
   flips.flipped.assign(quads.num_quads(), 0);
   flips.valid = quad_mesh_defects(quad_topology(quads), state.euler_characteristic).empty();
   if (!flips.valid) return flips;
-  untangle_on_surface(state, state.field->feature_edge, quads, progress);
+  flips.untangle = untangle_on_surface(state, state.field->feature_edge, quads, progress);
   const TriMesh& surface = state.full_mesh ? *state.full_mesh : state.mesh;
   const TriangleBvh bvh(surface);
   for (int q = 0; q < quads.num_quads(); ++q) {
@@ -145,6 +146,7 @@ void keep_zero_edges_where_layout_flips(const ComponentState& state, Quantizatio
     ++q.flip_rounds;
   }
   q.flipped_layout_quads = best.valid ? best.count : -1;
+  if (best.valid) q.placed_layout = Quantized::PlacedLayout{std::move(best.layout), best.untangle};
   q.flip_seconds = timer.seconds();
 }
 
@@ -247,8 +249,10 @@ std::optional<QuadChoice> quads_of_the_map(const ComponentState& state, Progress
 // and *defects says why (*collapsed: they form a manifold, oriented mesh of another topology).
 std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progress& progress, std::string* defects,
                                               bool* collapsed) {
-  LayoutQuads layout = extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
-                                            state.quantization->result.x, progress, true, state.tip_vertices);
+  const std::optional<Quantized::PlacedLayout>& placed = state.quantization->placed_layout;
+  LayoutQuads layout = placed ? placed->layout
+                              : extract_layout_quads(state.mesh, state.traced->exact, state.traced->tmesh,
+                                                     state.quantization->result.x, progress, true, state.tip_vertices);
   const QuadTopology topology = quad_topology(layout.quads);
   *defects = quad_mesh_defects(topology, state.euler_characteristic);
   *collapsed = topology.non_manifold_edges + topology.inconsistent_edges + topology.degenerate_quads == 0;
@@ -260,7 +264,8 @@ std::optional<QuadChoice> quads_of_the_layout(const ComponentState& state, Progr
   choice.extraction.stats.seconds = layout.stats.seconds;
   for (char s : choice.extraction.quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
   choice.layout = layout.stats;
-  choice.untangle = untangle_on_surface(state, state.field->feature_edge, choice.extraction.quads, progress);
+  choice.untangle = placed ? placed->untangle
+                           : untangle_on_surface(state, state.field->feature_edge, choice.extraction.quads, progress);
   return choice;
 }
 
