@@ -99,6 +99,11 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
                                                         state.quantization->result.x, progress);
         const QuadMesh& quads = layout.quads;
         EXPECT_EQ(quads.num_quads(), state.quantization->result.quads_expected) << where;
+        // The layout the quantization placed for quad extraction is that of its kept lengths.
+        if (state.quantization->placed_layout) {
+          EXPECT_EQ(state.quantization->placed_layout->layout.quads.Q, quads.Q) << where;
+          EXPECT_EQ(state.quantization->placed_layout->layout.quad_cell, layout.quad_cell) << where;
+        }
         const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(quads), state.mesh, -1, progress);
         // The untangle step, as the session runs it: bounded moves on the surface, same connectivity.
         QuadMesh untangled = quads;
