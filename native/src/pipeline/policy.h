@@ -91,9 +91,10 @@ bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs)
 bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state);
 // That first map, with pairs cancelled, gets a short repair: it stops after this many rounds
 // without fewer bad triangles and skips the escalations (the rounds that move shared coordinates,
-// the global solve in the field's frame), as the field without cancelled pairs follows (dragon-genus1: its map with
-// pairs cancelled stayed at one bad triangle for 19 of 24 rounds at 500 quads, and the global solve took 22 s of its 29
-// s; at 8 000 quads 50 s of 81 s; both then fell back).
+// the global solve in the field's frame), as the field without cancelled pairs follows
+// (dragon-genus1: its map with pairs cancelled stayed at one bad triangle for 19 of 24 rounds at
+// 500 quads, and the global solve took 22 s of its 29 s; at 8 000 quads 50 s of 81 s; both then
+// fell back).
 constexpr int kCancelledPairsStagnantRounds = 8;
 void bound_repair_where_pairs_were_cancelled(const ComponentState& state, SeamlessMapOptions& options);
 // A remesh part that failed at quantization, the integer-grid map or quad extraction with a field
