@@ -9,121 +9,12 @@
 #include "core/max_min_lp.h"
 #include "core/timer.h"
 #include "metrics/quad_metrics.h"
+#include "quad_extraction/feature_curves.h"
 #include "quad_extraction/surface_projection.h"
 
 namespace qgp {
 
 namespace {
-
-// The feature and boundary edges of a surface as curves that quad vertices on them slide along.
-// Quad vertices at curve corners (surface vertices with other than two feature or boundary edges,
-// or where the curve turns by more than a degree) never move, and none slides past a corner, so the
-// quad edges along a curve keep its shape.
-class FeatureCurves {
- public:
-  FeatureCurves(const TriMesh& surface, const std::vector<char>& feature_edges)
-      : surface_(surface), feature_edges_(feature_edges), edges_at_(surface.num_vertices()) {
-    for (int e = 0; e < surface.num_edges(); ++e)
-      if (is_curve(e)) {
-        const int h = surface.edge_halfedge[e];
-        edges_at_[surface.from(h)].push_back(e);
-        edges_at_[surface.to(h)].push_back(e);
-      }
-    corner_.assign(surface.num_vertices(), 0);
-    for (int u = 0; u < surface.num_vertices(); ++u) {
-      if (edges_at_[u].empty()) continue;
-      if (edges_at_[u].size() != 2) {
-        corner_[u] = 1;
-        continue;
-      }
-      Vec3 d[2];
-      for (int i = 0; i < 2; ++i) {
-        const int h = surface.edge_halfedge[edges_at_[u][i]];
-        d[i] = (surface.position(surface.from(h) == u ? surface.to(h) : surface.from(h)) - surface.position(u))
-                   .normalized();
-      }
-      corner_[u] = !(d[0].dot(d[1]) < -std::cos(M_PI / 180));
-    }
-  }
-
-  // Where a quad vertex at p in surface triangle f sits.
-  struct Place {
-    enum Kind { kFree, kOnCurve, kCorner } kind = kFree;
-    int edge = -1;  // kOnCurve: the surface edge ...
-    double s = 0;   // ... and the parameter along it, from(edge_halfedge) = 0 to to(edge_halfedge) = 1
-  };
-  Place locate(const Vec3& p, int f) const {
-    Place place;
-    if (f < 0 || f >= surface_.num_faces()) {
-      place.kind = Place::kCorner;
-      return place;
-    }
-    for (int k = 0; k < 3; ++k) {
-      const int u = surface_.F(f, k);
-      const Vec3 a = surface_.position(u), b = surface_.position(surface_.F(f, (k + 1) % 3));
-      const double tolerance = 1e-6 * (b - a).norm();
-      if (edges_at_[u].empty() || (p - a).norm() > tolerance) continue;
-      if (corner_[u]) {
-        place.kind = Place::kCorner;
-        return place;
-      }
-      place = {Place::kOnCurve, edges_at_[u][0],
-               surface_.from(surface_.edge_halfedge[edges_at_[u][0]]) == u ? 0.0 : 1.0};
-    }
-    if (place.kind != Place::kFree) return place;
-    for (int k = 0; k < 3; ++k) {
-      const int e = surface_.edge_of[3 * f + k];
-      const Vec3 a = surface_.position(surface_.F(f, k)), b = surface_.position(surface_.F(f, (k + 1) % 3));
-      if (!is_curve(e) || point_segment_distance(p, a, b) > 1e-6 * (b - a).norm()) continue;
-      const int h = surface_.edge_halfedge[e];
-      const Vec3 from = surface_.position(surface_.from(h)), along = surface_.edge_vector(h);
-      place = {Place::kOnCurve, e, std::clamp((p - from).dot(along) / along.squaredNorm(), 0.0, 1.0)};
-    }
-    return place;
-  }
-
-  Vec3 point(const Place& place) const {
-    const int h = surface_.edge_halfedge[place.edge];
-    return surface_.position(surface_.from(h)) + place.s * surface_.edge_vector(h);
-  }
-  // Unit direction of increasing s.
-  Vec3 direction(const Place& place) const {
-    return surface_.edge_vector(surface_.edge_halfedge[place.edge]).normalized();
-  }
-  int face(const Place& place) const { return TriMesh::face(surface_.edge_halfedge[place.edge]); }
-
-  // The place `distance` away along the curve (towards increasing s if positive), stopping at corners.
-  Place walk(Place place, double distance) const {
-    int dir = distance >= 0 ? 1 : -1;
-    double left = std::abs(distance);
-    for (int guard = 0; guard < 100000; ++guard) {
-      const int h = surface_.edge_halfedge[place.edge];
-      const double length = surface_.edge_vector(h).norm();
-      const double room = (dir > 0 ? 1 - place.s : place.s) * length;
-      if (left <= room) {
-        if (length > 0) place.s = std::clamp(place.s + dir * left / length, 0.0, 1.0);
-        return place;
-      }
-      left -= room;
-      const int u = dir > 0 ? surface_.to(h) : surface_.from(h);
-      place.s = dir > 0 ? 1 : 0;
-      if (corner_[u]) return place;
-      place.edge = edges_at_[u][0] == place.edge ? edges_at_[u][1] : edges_at_[u][0];
-      const bool forward = surface_.from(surface_.edge_halfedge[place.edge]) == u;
-      dir = forward ? 1 : -1;
-      place.s = forward ? 0 : 1;
-    }
-    return place;
-  }
-
- private:
-  bool is_curve(int e) const { return surface_.is_boundary_edge(e) || (!feature_edges_.empty() && feature_edges_[e]); }
-
-  const TriMesh& surface_;
-  const std::vector<char>& feature_edges_;
-  std::vector<std::vector<int>> edges_at_;  // per surface vertex: its feature and boundary edges
-  std::vector<char> corner_;                // per surface vertex
-};
 
 // How far a free vertex may go from where it started, in its mean edge lengths: the short reach
 // first (it keeps the surface best), the longer ones only where quads stay flipped.
@@ -174,20 +65,26 @@ StarKey star_key(const std::vector<double>& terms) {
 // One untangle run over a quad mesh: its adjacency, which vertices may move, and how far.
 class Untangler {
  public:
-  Untangler(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges, Progress& progress)
+  // flipped: per quad, whether it is flipped, when known (else empty).
+  Untangler(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh, const FeatureCurves& curves,
+            const std::vector<char>& near, std::vector<char> flipped, Progress& progress)
       : quads_(quads),
         surface_(surface),
-        bvh_(surface),
-        curves_(surface, feature_edges),
+        bvh_(bvh),
+        near_(near),
+        curves_(curves),
         progress_(progress),
-        start_(quads.V) {
+        start_(quads.V),
+        flipped_(std::move(flipped)) {
     const int nv = quads.num_vertices(), nq = quads.num_quads();
-    flipped_.assign(nq, 0);
-    for (int q = 0; q < nq; ++q) {
-      if ((q & 1023) == 0) progress.check_cancel();
-      flipped_[q] = is_flipped(q);
-      flipped_count_ += flipped_[q];
+    if (static_cast<int>(flipped_.size()) != nq) {
+      flipped_.assign(nq, 0);
+      for (int q = 0; q < nq; ++q) {
+        if ((q & 1023) == 0) progress.check_cancel();
+        flipped_[q] = is_flipped(q);
+      }
     }
+    flipped_count_ = static_cast<int>(std::count(flipped_.begin(), flipped_.end(), 1));
     if (flipped_count_ == 0) return;
     vertex_quads_.resize(nv);
     neighbours_.resize(nv);
@@ -217,6 +114,7 @@ class Untangler {
   }
 
   int flipped_count() const { return flipped_count_; }
+  const std::vector<char>& flipped() const { return flipped_; }
   // Vertices away from where they started.
   int moved_vertices() const {
     int moved = 0;
@@ -232,7 +130,7 @@ class Untangler {
     std::vector<char> in_region(nv, 0);
     std::vector<int> frontier;
     for (int q = 0; q < nq; ++q)
-      if (flipped_[q])
+      if (flipped_[q] && seeds(q))
         for (int k = 0; k < 4; ++k)
           if (!in_region[quads_.Q(q, k)]) in_region[quads_.Q(q, k)] = 1, frontier.push_back(quads_.Q(q, k));
     for (int r = 0; r < rings; ++r) {
@@ -305,6 +203,13 @@ class Untangler {
   }
 
  private:
+  // A flipped quad starts a region when it has a vertex in near_ (every flipped quad when empty).
+  bool seeds(int q) const {
+    if (near_.empty()) return true;
+    for (int k = 0; k < 4; ++k)
+      if (near_[quads_.Q(q, k)]) return true;
+    return false;
+  }
   void corners(int q, Vec3 p[4]) const {
     for (int k = 0; k < 4; ++k) p[k] = quads_.V.row(quads_.Q(q, k)).transpose();
   }
@@ -389,11 +294,12 @@ class Untangler {
 
   QuadMesh& quads_;
   const TriMesh& surface_;
-  const TriangleBvh bvh_;
-  const FeatureCurves curves_;
+  const TriangleBvh& bvh_;
+  const std::vector<char>& near_;
+  const FeatureCurves& curves_;
   Progress& progress_;
   const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> start_;
-  std::vector<char> flipped_;
+  std::vector<char> flipped_;  // per quad
   int flipped_count_ = 0;
   std::vector<std::vector<int>> vertex_quads_, neighbours_;
   std::vector<FeatureCurves::Place> place_;  // per quad vertex: free, on a curve, or at a corner
@@ -409,12 +315,25 @@ class Untangler {
 
 UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges,
                                      Progress& progress, int max_rings) {
-  Timer timer;
+  check_untangle_inputs(quads, surface, feature_edges);
+  const TriangleBvh bvh(surface);
+  const FeatureCurves curves(surface, feature_edges);
+  std::vector<char> flipped;
+  return untangle_flipped_quads_near(quads, surface, bvh, curves, {}, flipped, progress, max_rings);
+}
+
+void check_untangle_inputs(const QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges) {
   if (static_cast<int>(quads.vertex_face.size()) != quads.num_vertices())
     throw Error(ErrorCode::Internal, "untangle: the quads have no surface triangle per vertex");
   if (!feature_edges.empty() && static_cast<int>(feature_edges.size()) != surface.num_edges())
     throw Error(ErrorCode::Internal, "untangle: the feature edges do not match the surface");
-  Untangler untangler(quads, surface, feature_edges, progress);
+}
+
+UntangleStats untangle_flipped_quads_near(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh,
+                                          const FeatureCurves& curves, const std::vector<char>& near,
+                                          std::vector<char>& flipped, Progress& progress, int max_rings) {
+  Timer timer;
+  Untangler untangler(quads, surface, bvh, curves, near, std::move(flipped), progress);
   UntangleStats stats;
   stats.flipped_before = untangler.flipped_count();
   // A round that helped is repeated on what is left; one that did not widens the region.
@@ -429,6 +348,7 @@ UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, co
   stats.flipped_after = untangler.flipped_count();
   stats.moved_vertices = untangler.moved_vertices();
   stats.seconds = timer.seconds();
+  flipped = untangler.flipped();
   return stats;
 }
 

@@ -15,6 +15,7 @@ struct UntangleStats {
   int flipped_before = 0, flipped_after = 0;  // quads flipped against the surface normals
   int moved_vertices = 0;                     // vertices at a new position
   int accepted_rounds = 0, rounds = 0;
+  int collapsed_quads = 0;  // folded quads removed by collapse_folded_quads (collapse_quads.h)
   double seconds = 0;
 };
 QGP_JSON_FIELDS(UntangleStats, flipped_before, flipped_after, moved_vertices, seconds)
@@ -29,5 +30,20 @@ QGP_JSON_FIELDS(UntangleStats, flipped_before, flipped_after, moved_vertices, se
 // feature_edges: #E of `surface` (may be empty).
 UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges,
                                      Progress& progress, int max_rings = 3);
+
+class FeatureCurves;
+class TriangleBvh;
+
+// Throws Error(Internal) when the quads have no surface triangle per vertex or the feature edges
+// do not match the surface.
+void check_untangle_inputs(const QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges);
+
+// untangle_flipped_quads on a surface whose closest-point tree and curves are built (the collapse
+// runs it many times), starting only from flipped quads with a vertex in `near` (#V; every flipped
+// quad when empty). flipped: per quad, whether it is flipped, when known (else empty); on return,
+// after.
+UntangleStats untangle_flipped_quads_near(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh,
+                                          const FeatureCurves& curves, const std::vector<char>& near,
+                                          std::vector<char>& flipped, Progress& progress, int max_rings);
 
 }  // namespace qgp
