@@ -12,6 +12,7 @@
 #include "intake/read_mesh_file.h"
 #include "metrics/polygon_metrics.h"
 #include "pipeline/session.h"
+#include "quad_extraction/collapse_quads.h"
 #include "quad_extraction/layout_quads.h"
 #include "quad_extraction/untangle_quads.h"
 #include "quantization/quantization.h"
@@ -74,6 +75,35 @@ std::vector<double> mean_edge_length(const QuadMesh& quads) {
     }
   for (size_t v = 0; v < sum.size(); ++v) sum[v] = count[v] > 0 ? sum[v] / count[v] : 0;
   return sum;
+}
+
+// The collapse after the untangle, as the session runs it: no quad stays flipped, slivers do not
+// grow in number, the mesh stays a consistently oriented manifold of the part's Euler
+// characteristic on the surface, and only the collapsed quads (and dissolved doublets) go.
+void expect_folds_collapsed(const QuadMesh& untangled, int flipped, const ComponentState& state,
+                            const std::string& where) {
+  Progress progress;
+  QuadMesh collapsed = untangled;
+  const UntangleStats stats = collapse_folded_quads(collapsed, state.mesh, state.field->feature_edge, progress);
+  const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(collapsed), state.mesh, -1, progress);
+  EXPECT_EQ(stats.flipped_before, flipped) << where;
+  EXPECT_EQ(stats.flipped_after, m.quad.flipped_quads()) << where;
+  EXPECT_EQ(m.quad.flipped_quads(), 0) << where << " (" << flipped << " flipped after the untangle)";
+  if (flipped > 0) EXPECT_GT(stats.collapsed_quads, 0) << where;
+  EXPECT_LE(test::count_slivers(collapsed), test::count_slivers(untangled)) << where;
+  EXPECT_LE(collapsed.num_quads(), untangled.num_quads() - stats.collapsed_quads) << where;
+  EXPECT_GE(collapsed.num_quads(), untangled.num_quads() - 3 * stats.collapsed_quads) << where;
+  EXPECT_EQ(m.non_manifold_edges, 0) << where;
+  EXPECT_EQ(m.quad.topology.inconsistent_edges, 0) << where;
+  EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << where;
+  EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << where;
+  EXPECT_EQ(m.euler_characteristic, state.euler_characteristic) << where;
+  EXPECT_EQ(test::irregular_vertices_off_singularities(collapsed), 0) << where;
+  const TriangleBvh bvh(state.mesh);
+  const double diagonal = state.mesh.bounding_box_diagonal();
+  for (int v = 0; v < collapsed.num_vertices(); ++v)
+    EXPECT_LT(std::sqrt(bvh.closest_point(collapsed.V.row(v).transpose()).squared_distance), 1e-9 * diagonal)
+        << where << " vertex " << v;
 }
 
 TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
@@ -142,6 +172,7 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << where;
         EXPECT_EQ(m.euler_characteristic, session.intake()->components[c].euler_characteristic) << where;
         EXPECT_EQ(test::irregular_vertices_off_singularities(quads), 0) << where;
+        expect_folds_collapsed(untangled, untangle.flipped_after, state, where);
       }
     }
   }

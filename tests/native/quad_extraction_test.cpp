@@ -21,6 +21,7 @@
 #include "igm/integer_grid_map.h"
 #include "igm/untangle_map.h"
 #include "metrics/quad_metrics.h"
+#include "quad_extraction/collapse_quads.h"
 #include "quad_extraction/quad_extraction.h"
 #include "quad_extraction/surface_projection.h"
 #include "quad_extraction/untangle_quads.h"
@@ -504,6 +505,102 @@ TEST(UntangleQuads, VertexOnASharpEdgeSlidesBackAlongIt) {
     if (extreme_axes(folded, u).size() == 2) EXPECT_EQ(extreme_axes(quads, u), extreme_axes(folded, u)) << u;
     EXPECT_LT(bvh.closest_point(quads.V.row(u).transpose()).squared_distance, 1e-18) << u;
   }
+}
+
+// The collapse's invariants on cube quads: only quads, a consistently oriented closed manifold of
+// Euler characteristic 2, every vertex on the cube, none flipped and no sliver left.
+void expect_valid_cube_quads(const QuadMesh& quads, const CubeQuads& input) {
+  Progress progress;
+  const QuadTopology t = quad_topology(quads);
+  EXPECT_EQ(t.non_manifold_edges + t.inconsistent_edges + t.degenerate_quads + t.unreferenced_vertices, 0);
+  EXPECT_EQ(t.boundary_edges, 0);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(compute_quad_metrics(quads, input.cube.mesh, QuadMetricsOptions{}, progress).flipped_quads(), 0);
+  EXPECT_EQ(test::count_slivers(quads), 0);
+  EXPECT_EQ(test::irregular_vertices_off_singularities(quads), 0);
+  for (int v = 0; v < quads.num_vertices(); ++v)
+    EXPECT_LT(input.bvh.closest_point(quads.V.row(v).transpose()).squared_distance, 1e-18) << v;
+}
+
+// Vertex `v` moved, on its cube face, to `share` of the way to the corner opposite it in its quad q.
+void squeeze_quad(CubeQuads& input, int q, int k, double share) {
+  QuadMesh& quads = input.quads;
+  const int v = quads.Q(q, k), w = quads.Q(q, (k + 2) % 4);
+  const Vec3 target = quads.V.row(v).transpose() + share * (quads.V.row(w) - quads.V.row(v)).transpose();
+  const TriangleBvh::Hit hit = input.bvh.closest_point(target);
+  quads.V.row(v) = hit.point.transpose();
+  quads.vertex_face[v] = hit.triangle;
+}
+
+// A quad squeezed to a sliver (one free corner moved 95 % of the way to the opposite one) is
+// collapsed: one quad and one vertex fewer, the vertices on the cube's sharp edges where they were.
+TEST(CollapseFoldedQuads, SliverOnACubeFaceIsCollapsed) {
+  CubeQuads input;
+  QuadMesh& quads = input.quads;
+  const QuadTopology before = quad_topology(quads);
+  auto on_cube_edge = [&](const QuadMesh& m, int v) {
+    int extreme = 0;
+    for (int a = 0; a < 3; ++a) extreme += std::abs(m.V(v, a)) < 1e-9 || std::abs(m.V(v, a) - 4) < 1e-9;
+    return extreme >= 2;
+  };
+  // A quad in the middle of a face: all four corners inside it (valence 4).
+  int q = 0;
+  for (; q < quads.num_quads(); ++q) {
+    bool inner = true;
+    for (int k = 0; k < 4; ++k)
+      inner = inner && !on_cube_edge(quads, quads.Q(q, k)) && before.valence[quads.Q(q, k)] == 4;
+    if (inner) break;
+  }
+  ASSERT_LT(q, quads.num_quads());
+  squeeze_quad(input, q, 0, 0.95);
+  ASSERT_EQ(test::count_slivers(quads), 1);
+  std::vector<Vec3> edge_points;
+  for (int v = 0; v < quads.num_vertices(); ++v)
+    if (on_cube_edge(quads, v)) edge_points.push_back(quads.V.row(v).transpose());
+  const QuadMesh squeezed = quads;
+  const UntangleStats stats = collapse_folded_quads(quads, input.cube.mesh, input.sharp, input.progress);
+  EXPECT_EQ(stats.collapsed_quads, 1);
+  EXPECT_EQ(quads.num_quads(), squeezed.num_quads() - 1);
+  EXPECT_EQ(quads.num_vertices(), squeezed.num_vertices() - 1);
+  expect_valid_cube_quads(quads, input);
+  std::vector<Vec3> edge_points_after;
+  for (int v = 0; v < quads.num_vertices(); ++v)
+    if (on_cube_edge(quads, v)) edge_points_after.push_back(quads.V.row(v).transpose());
+  EXPECT_EQ(edge_points_after, edge_points);
+  // Nothing folded: nothing changes.
+  QuadMesh clean = CubeQuads{}.quads;
+  const QuadMesh copy = clean;
+  EXPECT_EQ(collapse_folded_quads(clean, input.cube.mesh, input.sharp, input.progress).collapsed_quads, 0);
+  EXPECT_EQ(clean.Q, copy.Q);
+  EXPECT_EQ(clean.V, copy.V);
+}
+
+// Without sharp edges every cube vertex is free. A quad at a cube corner squeezed along its diagonal
+// between the two cube-edge vertices (the corner of valence 3 beside them): both diagonals remove
+// the sliver, so the shorter goes; the two cube-edge vertices merge, the corner is left with two
+// quads and is dissolved (two quads and two vertices fewer), and the result is valid.
+TEST(CollapseFoldedQuads, SliverBesideAValence3CornerDissolvesIt) {
+  CubeQuads input;
+  QuadMesh& quads = input.quads;
+  const QuadTopology before = quad_topology(quads);
+  int q = 0, k = 0;
+  for (; q < quads.num_quads(); ++q) {
+    for (k = 0; k < 4 && before.valence[quads.Q(q, (k + 1) % 4)] != 3; ++k) {
+    }
+    if (k < 4) break;
+  }
+  ASSERT_LT(q, quads.num_quads());
+  // Corner k + 1 has valence 3: corners k and k + 2 are the cube-edge vertices; squeeze k toward k + 2.
+  squeeze_quad(input, q, k, 0.95);
+  ASSERT_EQ(test::count_slivers(quads), 1);
+  const QuadMesh squeezed = quads;
+  const std::vector<char> no_features;
+  const UntangleStats stats = collapse_folded_quads(quads, input.cube.mesh, no_features, input.progress);
+  EXPECT_EQ(stats.collapsed_quads, 1);
+  const int removed = squeezed.num_quads() - quads.num_quads();
+  EXPECT_EQ(removed, 2);
+  EXPECT_EQ(squeezed.num_vertices() - quads.num_vertices(), removed);
+  expect_valid_cube_quads(quads, input);
 }
 
 // Moves vertex v of an exact map by delta, given in the chart of its outgoing halfedge h0, in every

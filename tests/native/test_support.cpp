@@ -261,4 +261,14 @@ int irregular_vertices_off_singularities(const QuadMesh& quads) {
   return count;
 }
 
+int count_slivers(const QuadMesh& quads) {
+  int count = 0;
+  for (int q = 0; q < quads.num_quads(); ++q) {
+    const double a = (quads.V.row(quads.Q(q, 0)) - quads.V.row(quads.Q(q, 2))).norm();
+    const double b = (quads.V.row(quads.Q(q, 1)) - quads.V.row(quads.Q(q, 3))).norm();
+    count += 10 * std::min(a, b) < std::max(a, b);
+  }
+  return count;
+}
+
 }  // namespace qgp::test

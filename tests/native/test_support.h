@@ -71,5 +71,7 @@ TriMesh make_fan_cylinder(int segments, double radius, double height);
 
 // Irregular quad vertices (valence != 4 inside, != 3 on the boundary) not flagged vertex_singular.
 int irregular_vertices_off_singularities(const QuadMesh& quads);
+// Quads whose shorter diagonal is under 1/10 of the longer (nearly degenerate).
+int count_slivers(const QuadMesh& quads);
 
 }  // namespace qgp::test
