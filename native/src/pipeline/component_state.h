@@ -169,7 +169,11 @@ struct ComponentState {
   bool quadded() const {
     return !failure || finer_edge_factor < 1 || split_quads.has_value() || without_cancelled_pairs || rescued_on_remesh;
   }
-  const QuadChoice& quad_choice() const { return split_quads ? *split_quads : *quads; }
+  // The quads in use with their folds collapsed, where collapse_folds collapsed any (policy.h).
+  std::optional<QuadChoice> collapsed_quads;
+  const QuadChoice& quad_choice() const {
+    return collapsed_quads ? *collapsed_quads : split_quads ? *split_quads : *quads;
+  }
 
   // Model units per uv unit of the seamless map.
   double seamless_edge_length() const { return seamless.key().edge_length; }

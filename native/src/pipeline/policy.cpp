@@ -12,6 +12,7 @@
 #include "igm/untangle_map.h"
 #include "intake/working_mesh.h"
 #include "metrics/quad_metrics.h"
+#include "quad_extraction/collapse_quads.h"
 #include "quad_extraction/split_triangles.h"
 #include "quad_extraction/surface_projection.h"
 
@@ -678,6 +679,23 @@ QuadChoice quads_of_split_triangles(const ComponentState& state, double target_q
   if (!defects.empty())
     throw Error(ErrorCode::StageFailed, "the triangles split into quads do not form a valid mesh (" + defects + ")");
   return choice;
+}
+
+bool collapse_folds(const ComponentState& state, QuadChoice& choice, Progress& progress) {
+  QuadMesh& quads = choice.extraction.quads;
+  if (choice.untangle.flipped_after == 0 && !has_slivers(quads)) return false;
+  const bool split = choice.source == QuadSource::SplitTriangles || !state.field.has_value();
+  const std::vector<char>& features = split ? state.feature_edges : state.field->feature_edge;
+  const UntangleStats collapse =
+      state.full_mesh ? collapse_folded_quads(quads, *state.full_mesh, state.full_feature_edges, progress)
+                      : collapse_folded_quads(quads, state.mesh, features, progress);
+  if (collapse.collapsed_quads == 0) return false;
+  choice.untangle.flipped_after = collapse.flipped_after;
+  choice.untangle.collapsed_quads = collapse.collapsed_quads;
+  choice.untangle.seconds += collapse.seconds;
+  choice.extraction.stats.singular_vertices = 0;
+  for (char s : quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
+  return true;
 }
 
 }  // namespace qgp

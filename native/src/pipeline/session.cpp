@@ -508,6 +508,27 @@ void Session::rescue_flipped_components(Progress& progress) {
   rescue_seconds = rescue_seconds.get<double>() + timer.seconds();  // after rescue_failed_components'
 }
 
+void Session::collapse_folded_components(Progress& progress) {
+  Timer timer;
+  Json collapsed = Json::array();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (!state.quadded()) continue;
+    QuadChoice choice = state.quad_choice();
+    const int flipped = choice.untangle.flipped_after, quads = choice.extraction.quads.num_quads();
+    if (!collapse_folds(state, choice, progress)) continue;
+    collapsed.push_back({{"component", c},
+                         {"collapsed_quads", choice.untangle.collapsed_quads},
+                         {"removed_quads", quads - choice.extraction.quads.num_quads()},
+                         {"flipped_before", flipped},
+                         {"flipped_after", choice.untangle.flipped_after}});
+    state.collapsed_quads = std::move(choice);
+  }
+  if (!collapsed.empty()) report_["extraction"]["collapsed"] = std::move(collapsed);
+  Json& rescue_seconds = report_["timings_s"]["rescue"];
+  rescue_seconds = rescue_seconds.get<double>() + timer.seconds();
+}
+
 void Session::mark_fields_without_cancelled_pairs() {
   Json& per_component = report_["field"]["components"];
   for (size_t c = 0; c < components_.size(); ++c)
@@ -527,6 +548,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for (ComponentState& state : components_) {
     state.failure.reset();
     state.split_quads.reset();
+    state.collapsed_quads.reset();
     state.finer_edge_factor = 1;
     state.without_cancelled_pairs = false;
     state.rescued_on_remesh = false;
@@ -567,6 +589,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
       rescue_failed_components(job, progress);
       remesh_parts_off_their_surface(job, progress);
       rescue_flipped_components(progress);
+      collapse_folded_components(progress);
       mark_fields_without_cancelled_pairs();
       report_["working_mesh"] = working_mesh_report(components_);  // with the parts rescued on a remesh
     }

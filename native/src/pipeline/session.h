@@ -108,6 +108,9 @@ class Session {
   // Components whose quads stay flipped are quadded at a finer density (policy.h: kFinerFlipShare)
   // or get their split triangles instead (kFlipRescueShare).
   void rescue_flipped_components(Progress& progress);
+  // The last rung for flipped quads and slivers (policy.h: collapse_folds) on every quadded part;
+  // the report's extraction.collapsed names the parts.
+  void collapse_folded_components(Progress& progress);
   // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them;
   // false if none gives such quads.
   bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
