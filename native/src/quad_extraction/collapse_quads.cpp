@@ -354,7 +354,6 @@ class FoldCollapser {
     const UntangleStats untangle = untangle_flipped_quads_near(
         quads, surface_, bvh_, curves_, near_vertex(quads, collapsed->merged), trial.flipped, progress_, rings_);
     trial.badness = {untangle.flipped_after, count_slivers(quads)};
-    if (getenv("QGP_DEBUG_COLLAPSE")) fprintf(stderr, "trial rings %d q %d diag %d: flipped %d->%d slivers %d->%d %.3f s\n", rings_, q, diagonal, badness_.flipped, untangle.flipped_after, badness_.slivers, trial.badness.slivers, untangle.seconds);
     trial.collapsed = std::move(*collapsed);
     return trial;
   }
