@@ -142,6 +142,12 @@ bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBv
   return !(normal.dot(quad_reference_normal(p, reference, reference_bvh)) > 0);
 }
 
+bool quad_is_flipped(const QuadMesh& quads, int q, const TriMesh& reference, const TriangleBvh& reference_bvh) {
+  Vec3 p[4];
+  for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
+  return quad_is_flipped(p, reference, reference_bvh);
+}
+
 namespace {
 
 // The reference surface per part, each with its own BVH, for judging a quad against its own part.

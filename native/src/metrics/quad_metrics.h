@@ -68,6 +68,8 @@ Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const Tria
 // Quad p[0..3] (counter-clockwise) is flipped: its normal (of the diagonals) points against the
 // summed normals of `reference` at the closest points of five interior points.
 bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh);
+// The same for quad q of `quads`.
+bool quad_is_flipped(const QuadMesh& quads, int q, const TriMesh& reference, const TriangleBvh& reference_bvh);
 
 // reference: the triangle surface the quads approximate (normals for flips, Hausdorff distance).
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,

@@ -104,9 +104,7 @@ LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>
   const TriMesh& surface = state.full_mesh ? *state.full_mesh : state.mesh;
   const TriangleBvh bvh(surface);
   for (int q = 0; q < quads.num_quads(); ++q) {
-    Vec3 p[4];
-    for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
-    flips.flipped[q] = quad_is_flipped(p, surface, bvh);
+    flips.flipped[q] = quad_is_flipped(quads, q, surface, bvh);
     flips.count += flips.flipped[q];
   }
   return flips;
@@ -681,21 +679,22 @@ QuadChoice quads_of_split_triangles(const ComponentState& state, double target_q
   return choice;
 }
 
-bool collapse_folds(const ComponentState& state, QuadChoice& choice, Progress& progress) {
-  QuadMesh& quads = choice.extraction.quads;
-  if (choice.untangle.flipped_after == 0 && !has_slivers(quads)) return false;
+std::optional<QuadChoice> collapse_folds(const ComponentState& state, const QuadChoice& choice, Progress& progress) {
+  if (choice.untangle.flipped_after == 0 && !has_slivers(choice.extraction.quads)) return std::nullopt;
+  QuadChoice collapsed = choice;
+  QuadMesh& quads = collapsed.extraction.quads;
   const bool split = choice.source == QuadSource::SplitTriangles || !state.field.has_value();
   const std::vector<char>& features = split ? state.feature_edges : state.field->feature_edge;
   const UntangleStats collapse =
       state.full_mesh ? collapse_folded_quads(quads, *state.full_mesh, state.full_feature_edges, progress)
                       : collapse_folded_quads(quads, state.mesh, features, progress);
-  if (collapse.collapsed_quads == 0) return false;
-  choice.untangle.flipped_after = collapse.flipped_after;
-  choice.untangle.collapsed_quads = collapse.collapsed_quads;
-  choice.untangle.seconds += collapse.seconds;
-  choice.extraction.stats.singular_vertices = 0;
-  for (char s : quads.vertex_singular) choice.extraction.stats.singular_vertices += s;
-  return true;
+  if (collapse.collapsed_quads == 0) return std::nullopt;
+  collapsed.untangle.flipped_after = collapse.flipped_after;
+  collapsed.untangle.collapsed_quads = collapse.collapsed_quads;
+  collapsed.untangle.seconds += collapse.seconds;
+  collapsed.extraction.stats.singular_vertices = 0;
+  for (char s : quads.vertex_singular) collapsed.extraction.stats.singular_vertices += s;
+  return collapsed;
 }
 
 }  // namespace qgp

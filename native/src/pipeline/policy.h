@@ -306,7 +306,7 @@ QuadChoice quads_of_split_triangles(const ComponentState& state, double target_q
 // had them collapsed at the density asked instead of going to a finer one): the choice's quads
 // that stay flipped against the surface, and slivers, are collapsed (quad_extraction/
 // collapse_quads.h: a merge of two opposite corners, up to three irregular vertices each) on the
-// surface they are measured against. False when none was.
-bool collapse_folds(const ComponentState& state, QuadChoice& choice, Progress& progress);
+// surface they are measured against: the choice with them collapsed, or nothing when none was.
+std::optional<QuadChoice> collapse_folds(const ComponentState& state, const QuadChoice& choice, Progress& progress);
 
 }  // namespace qgp

@@ -514,15 +514,15 @@ void Session::collapse_folded_components(Progress& progress) {
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
     if (!state.quadded()) continue;
-    QuadChoice choice = state.quad_choice();
-    const int flipped = choice.untangle.flipped_after, quads = choice.extraction.quads.num_quads();
-    if (!collapse_folds(state, choice, progress)) continue;
+    const QuadChoice& choice = state.quad_choice();
+    std::optional<QuadChoice> folded = collapse_folds(state, choice, progress);
+    if (!folded) continue;
     collapsed.push_back({{"component", c},
-                         {"collapsed_quads", choice.untangle.collapsed_quads},
-                         {"removed_quads", quads - choice.extraction.quads.num_quads()},
-                         {"flipped_before", flipped},
-                         {"flipped_after", choice.untangle.flipped_after}});
-    state.collapsed_quads = std::move(choice);
+                         {"collapsed_quads", folded->untangle.collapsed_quads},
+                         {"removed_quads", choice.extraction.quads.num_quads() - folded->extraction.quads.num_quads()},
+                         {"flipped_before", choice.untangle.flipped_after},
+                         {"flipped_after", folded->untangle.flipped_after}});
+    state.collapsed_quads = std::move(folded);
   }
   if (!collapsed.empty()) report_["extraction"]["collapsed"] = std::move(collapsed);
   Json& rescue_seconds = report_["timings_s"]["rescue"];

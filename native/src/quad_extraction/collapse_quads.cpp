@@ -14,33 +14,17 @@ namespace qgp {
 
 namespace {
 
-bool quad_flipped(const QuadMesh& quads, int q, const TriMesh& surface, const TriangleBvh& bvh) {
-  Vec3 p[4];
-  for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
-  return quad_is_flipped(p, surface, bvh);
-}
-
 // Parts with more flipped quads than this after the untangle are not collapsed: their flips are
 // not local (cycloidal's gear parts keep dozens at every density).
 constexpr int kMaxFlippedToCollapse = 32;
-
-// The other vertices of the quads around v.
-std::vector<int> star_vertices(const QuadMesh& quads, int v) {
-  std::vector<int> star;
-  for (int q = 0; q < quads.num_quads(); ++q)
-    for (int k = 0; k < 4; ++k)
-      if (quads.Q(q, k) == v)
-        for (int j = 1; j < 4; ++j) star.push_back(quads.Q(q, (k + j) % 4));
-  std::sort(star.begin(), star.end());
-  star.erase(std::unique(star.begin(), star.end()), star.end());
-  return star;
-}
 
 // #V: the vertex v and the vertices of the quads around it.
 std::vector<char> near_vertex(const QuadMesh& quads, int v) {
   std::vector<char> near(quads.num_vertices(), 0);
   near[v] = 1;
-  for (int w : star_vertices(quads, v)) near[w] = 1;
+  for (int q = 0; q < quads.num_quads(); ++q)
+    if ((quads.Q.row(q).array() == v).any())
+      for (int k = 0; k < 4; ++k) near[quads.Q(q, k)] = 1;
   return near;
 }
 
@@ -161,11 +145,11 @@ bool one_fan(const QuadMesh& quads, int v) {
 // is not a consistently oriented manifold of the same Euler characteristic. The merged
 // vertex takes the place of the one on a curve or boundary, else the surface point nearest the
 // middle of the diagonal.
-std::optional<Collapsed> collapse_diagonal(const QuadMesh& quads, int q, int diagonal, const FeatureCurves& curves,
-                                           const TriangleBvh& bvh) {
+// topology: quad_topology(quads).
+std::optional<Collapsed> collapse_diagonal(const QuadMesh& quads, const QuadTopology& topology, int q, int diagonal,
+                                           const FeatureCurves& curves, const TriangleBvh& bvh) {
   const int a = quads.Q(q, diagonal), b = quads.Q(q, diagonal + 1), c = quads.Q(q, diagonal + 2),
             d = quads.Q(q, (diagonal + 3) % 4);
-  const QuadTopology topology = quad_topology(quads);
   auto constrained = [&](int v) {
     return topology.on_boundary[v] ||
            curves.locate(quads.V.row(v).transpose(), quads.vertex_face[v]).kind != FeatureCurves::Place::kFree;
@@ -241,12 +225,13 @@ class FoldCollapser {
     flipped_.resize(quads.num_quads());
     for (int q = 0; q < quads.num_quads(); ++q) {
       if ((q & 1023) == 0) progress.check_cancel();
-      flipped_[q] = quad_flipped(quads, q, surface, bvh_);
+      flipped_[q] = quad_is_flipped(quads, q, surface, bvh_);
     }
     badness_ = {static_cast<int>(std::count(flipped_.begin(), flipped_.end(), 1)), count_slivers(quads)};
     original_.resize(quads.num_quads());
     std::iota(original_.begin(), original_.end(), 0);
     tried_.assign(quads.num_quads(), 0);
+    topology_ = quad_topology(quads);
   }
 
   const Badness& badness() const { return badness_; }
@@ -338,7 +323,7 @@ class FoldCollapser {
 
   // Quad q collapsed along a diagonal, then untangled around the merged vertex.
   std::optional<Trial> try_collapse(int q, int diagonal) {
-    std::optional<Collapsed> collapsed = collapse_diagonal(quads_, q, diagonal, curves_, bvh_);
+    std::optional<Collapsed> collapsed = collapse_diagonal(quads_, topology_, q, diagonal, curves_, bvh_);
     if (!collapsed) return std::nullopt;
     Trial trial;
     QuadMesh& quads = collapsed->quads;
@@ -348,7 +333,7 @@ class FoldCollapser {
     for (int f = 0; f < quads.num_quads(); ++f) {
       bool changed = false;
       for (int k = 0; k < 4; ++k) changed |= touched[quads.Q(f, k)];
-      trial.flipped[f] = changed ? quad_flipped(quads, f, surface_, bvh_) : flipped_[collapsed->old_quad[f]];
+      trial.flipped[f] = changed ? quad_is_flipped(quads, f, surface_, bvh_) : flipped_[collapsed->old_quad[f]];
     }
     const UntangleStats untangle = untangle_flipped_quads_near(
         quads, surface_, bvh_, curves_, near_vertex(quads, collapsed->merged), trial.flipped, progress_, rings_);
@@ -364,6 +349,7 @@ class FoldCollapser {
     original_ = std::move(original);
     flipped_ = std::move(trial.flipped);
     badness_ = trial.badness;
+    topology_ = quad_topology(quads_);
   }
 
   int rings_ = 1;              // of the untangle after a trial collapse
@@ -377,6 +363,7 @@ class FoldCollapser {
   Badness badness_;
   std::vector<int> original_;  // per quad: its index before any collapse
   std::vector<char> tried_;    // per such index
+  QuadTopology topology_;      // of quads_, for every trial until one is kept
 };
 
 }  // namespace

@@ -213,11 +213,7 @@ class Untangler {
   void corners(int q, Vec3 p[4]) const {
     for (int k = 0; k < 4; ++k) p[k] = quads_.V.row(quads_.Q(q, k)).transpose();
   }
-  bool is_flipped(int q) const {
-    Vec3 p[4];
-    corners(q, p);
-    return quad_is_flipped(p, surface_, bvh_);
-  }
+  bool is_flipped(int q) const { return quad_is_flipped(quads_, q, surface_, bvh_); }
 
   Star star_of(int v) const {
     Star star;
