@@ -61,7 +61,8 @@ Vec2 reference_argmax(const std::vector<double>& c, const std::vector<Vec2>& g, 
 }
 
 // Stars of 2 to 8 quads (5 terms each), as the untangle builds them, around varied centres; some
-// with terms far above the others (never the worst: left out of the first enumeration) and some
+// with two terms equal at a corner of the octagon (the end of two of its sides), some with terms far
+// above the others (never the worst: left out of the first enumeration) and some
 // with constant terms (the corner opposite the moving vertex: a plateau of optima where one is the
 // worst, on which the full order of the candidates decides).
 TEST(MaxMinLp, SameAnswerAsEvaluatingEveryTermAndNoBetterPoint) {
@@ -84,6 +85,12 @@ TEST(MaxMinLp, SameAnswerAsEvaluatingEveryTermAndNoBetterPoint) {
       for (int i = 2; i < m; i += 5) g[i] = Vec2::Zero(), c[i] -= instance % 5 == 0 ? 3 : 0.5;  // constant
     const Vec2 centre(0.5 * unit(rng), 0.5 * unit(rng));
     const double radius = std::max(1.0, centre.norm());
+    if (instance % 7 == 0) {  // two terms equal at an octagon corner: a candidate at a side's end
+      const int k = instance % 8;
+      const Vec2 corner =
+          centre + radius / std::cos(M_PI / 8) * Vec2(std::cos((k + 0.5) * M_PI / 4), std::sin((k + 0.5) * M_PI / 4));
+      c[4] = c[3] + (g[3] - g[4]).dot(corner);
+    }
     const Vec2 d = maximize_worst_term(c, g, centre, radius);
     const Vec2 expected = reference_argmax(c, g, centre, radius);
     ASSERT_EQ(d.x(), expected.x()) << "instance " << instance;

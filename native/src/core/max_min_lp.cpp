@@ -28,71 +28,129 @@ struct Candidate {
 // The candidates of the octagon (corners, sides) in their order, each judged by all terms: the
 // first strictly best one. `ceiling`: no point's worst term exceeds it, so the first candidate that
 // reaches it is that one and the enumeration ends there.
-Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
-                         double ceiling = std::numeric_limits<double>::infinity()) {
-  const size_t m = c.size();
-  const Vec2(&corner)[8] = octagon.corner;
-  const Vec2(&side)[8] = octagon.side;
-  const Vec2& centre = octagon.centre;
-  const double radius = octagon.radius;
-  auto inside = [&](const Vec2& d) {
-    for (const Vec2& u : side)
-      if (u.dot(d - centre) > radius * (1 + 1e-9)) return false;
+class CandidateSearch {
+ public:
+  CandidateSearch(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon, double ceiling)
+      : c_(c), g_(g), octagon_(octagon), m_(c.size()), ceiling_(ceiling), rounding_(m_) {
+    best_value_ = worst(best_);
+    // A bound on each term's rounding anywhere in the octagon, far above the error of any sum of its
+    // parts there.
+    double extent = 0;  // the largest coordinate of a point of the octagon
+    for (const Vec2& corner : octagon_.corner) extent = std::max(extent, corner.cwiseAbs().maxCoeff());
+    for (size_t i = 0; i < m_; ++i) rounding_[i] = 1e-9 * (1 + std::abs(c_[i]) + g_[i].cwiseAbs().sum() * extent);
+  }
+
+  Candidate run() {
+    if (best_value_ < ceiling_ && !corners_and_sides()) three_term_points();
+    return {best_, best_value_};
+  }
+
+ private:
+  bool inside(const Vec2& d) const {
+    for (const Vec2& u : octagon_.side)
+      if (u.dot(d - octagon_.centre) > octagon_.radius * (1 + 1e-9)) return false;
     return true;
-  };
-  auto worst = [&](const Vec2& d) {
+  }
+  double term(size_t i, const Vec2& d) const { return c_[i] + g_[i].dot(d); }
+  double worst(const Vec2& d) const {
     double w = std::numeric_limits<double>::infinity();
-    for (size_t i = 0; i < m; ++i) w = std::min(w, c[i] + g[i].dot(d));
+    for (size_t i = 0; i < m_; ++i) w = std::min(w, term(i, d));
     return w;
-  };
-  Vec2 best = Vec2::Zero();
-  double best_value = worst(best);
+  }
   // d replaces the best when its worst term is larger. The terms are tried from the one that was
   // worst at the last best point, and the first at or below the best value rules d out: the same
   // answer as evaluating them all, without the O(m) cost for almost every candidate.
-  size_t first = 0;
-  auto beats_best = [&](const Vec2& d) {
-    if (c[first] + g[first].dot(d) <= best_value) return false;
-    for (size_t i = 0; i < m; ++i)
-      if (c[i] + g[i].dot(d) <= best_value) {
-        first = i;
+  bool beats_best(const Vec2& d) {
+    if (term(first_, d) <= best_value_) return false;
+    for (size_t i = 0; i < m_; ++i)
+      if (term(i, d) <= best_value_) {
+        first_ = i;
         return false;
       }
     return true;
-  };
-  // True once the best reaches the ceiling.
-  auto consider = [&](const Vec2& d) {
-    if (!beats_best(d)) return false;
-    best_value = worst(d);
-    best = d;
-    return best_value >= ceiling;
-  };
-  if (best_value >= ceiling) return {best, best_value};
-  for (int k = 0; k < 8; ++k) {
-    if (consider(corner[k])) return {best, best_value};
-    const Vec2 a = corner[(k + 7) % 8], b = corner[k];
-    for (size_t i = 0; i < m; ++i)
-      for (size_t j = i + 1; j < m; ++j) {
-        const Vec2 dg = g[i] - g[j];
-        const double slope = dg.dot(b - a);
-        if (std::abs(slope) < 1e-14) continue;
-        const double s = -(c[i] - c[j] + dg.dot(a)) / slope;
-        if (s >= 0 && s <= 1 && consider(a + s * (b - a))) return {best, best_value};
-      }
   }
-  for (size_t i = 0; i < m; ++i)
-    for (size_t j = i + 1; j < m; ++j) {
-      const Vec2 r0 = g[i] - g[j];
-      for (size_t l = j + 1; l < m; ++l) {
-        const Vec2 r1 = g[i] - g[l];
-        const double det = r0.x() * r1.y() - r0.y() * r1.x();
-        if (std::abs(det) < 1e-14) continue;
-        const double b0 = c[j] - c[i], b1 = c[l] - c[i];
-        const Vec2 d((b0 * r1.y() - r0.y() * b1) / det, (r0.x() * b1 - b0 * r1.x()) / det);
-        if (inside(d) && consider(d)) return {best, best_value};
+  // d becomes the best; true once the best reaches the ceiling.
+  bool take(const Vec2& d) {
+    best_value_ = worst(d);
+    best_ = d;
+    return best_value_ >= ceiling_;
+  }
+  bool consider(const Vec2& d) { return beats_best(d) && take(d); }
+
+  // Each corner, then the points of the side before it where two terms are equal. True once the
+  // best reaches the ceiling.
+  bool corners_and_sides() {
+    for (int k = 0; k < 8; ++k) {
+      if (consider(octagon_.corner[k])) return true;
+      const Vec2 a = octagon_.corner[(k + 7) % 8], b = octagon_.corner[k];
+      index_side(a, b);
+      for (size_t p = 0; p < alive_.size(); ++p) {
+        const size_t i = alive_[p];
+        for (size_t q = p + 1; q < alive_.size(); ++q) {
+          const size_t j = alive_[q];
+          if (!may_meet_on_side(i, j)) continue;
+          const Vec2 dg = g_[i] - g_[j];
+          const double slope = dg.dot(b - a);
+          if (std::abs(slope) < 1e-14) continue;
+          const double s = -(c_[i] - c_[j] + dg.dot(a)) / slope;
+          if (s >= 0 && s <= 1 && consider(a + s * (b - a))) return true;
+        }
       }
     }
-  return {best, best_value};
+    return false;
+  }
+  // Each term at the ends a, b of a side; alive_: the terms above_best_on_side, in order.
+  void index_side(const Vec2& a, const Vec2& b) {
+    at_a_.resize(m_), at_b_.resize(m_);
+    alive_.clear();
+    for (size_t i = 0; i < m_; ++i) {
+      at_a_[i] = term(i, a), at_b_[i] = term(i, b);
+      if (above_best_on_side(i)) alive_.push_back(i);
+    }
+  }
+  // Skipping the candidates these two rule out leaves the answer unchanged (the best value only
+  // grows). False where term i may not exceed the best value anywhere on the side (a candidate must
+  // exceed it in every term)...
+  bool above_best_on_side(size_t i) const { return std::max(at_a_[i], at_b_[i]) + rounding_[i] > best_value_; }
+  // ...or terms i and j are unequal all along it (one exceeds the other at both ends by far more
+  // than rounding).
+  bool may_meet_on_side(size_t i, size_t j) const {
+    const double da = at_a_[i] - at_a_[j], db = at_b_[i] - at_b_[j], margin = rounding_[i] + rounding_[j];
+    return !((da > margin && db > margin) || (da < -margin && db < -margin));
+  }
+  // The points inside where three terms are equal.
+  void three_term_points() {
+    for (size_t i = 0; i < m_; ++i)
+      for (size_t j = i + 1; j < m_; ++j) {
+        const Vec2 r0 = g_[i] - g_[j];
+        for (size_t l = j + 1; l < m_; ++l) {
+          const Vec2 r1 = g_[i] - g_[l];
+          const double det = r0.x() * r1.y() - r0.y() * r1.x();
+          if (std::abs(det) < 1e-14) continue;
+          const double b0 = c_[j] - c_[i], b1 = c_[l] - c_[i];
+          const Vec2 d((b0 * r1.y() - r0.y() * b1) / det, (r0.x() * b1 - b0 * r1.x()) / det);
+          // Most points are ruled out by a term at once: that test comes before the octagon's sides.
+          if (beats_best(d) && inside(d) && take(d)) return;
+        }
+      }
+  }
+
+  const std::vector<double>& c_;
+  const std::vector<Vec2>& g_;
+  const Octagon& octagon_;
+  const size_t m_;
+  const double ceiling_;
+  std::vector<double> rounding_;  // per term
+  Vec2 best_ = Vec2::Zero();
+  double best_value_ = 0;
+  size_t first_ = 0;
+  std::vector<double> at_a_, at_b_;  // see index_side
+  std::vector<size_t> alive_;
+};
+
+Candidate best_candidate(const std::vector<double>& c, const std::vector<Vec2>& g, const Octagon& octagon,
+                         double ceiling = std::numeric_limits<double>::infinity()) {
+  return CandidateSearch(c, g, octagon, ceiling).run();
 }
 
 // The terms that can be the smallest somewhere in the octagon, in their order. Let U be the
