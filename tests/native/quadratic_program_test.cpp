@@ -204,6 +204,47 @@ TEST(InteriorPointQP, SameProgramSameBits) {
   for (Eigen::Index i = 0; i < a.x.size(); ++i) EXPECT_EQ(a.x[i], b.x[i]);
 }
 
+// repair_like_qp with `rows` more rows of `length` consecutive variables each: enough products of
+// long rows (rows * length^2 / 2) for the normal matrix's assembly to use several threads.
+SparseQP with_long_rows(SparseQP qp, int rows, int length, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int n = static_cast<int>(qp.linear.size()), old_rows = static_cast<int>(qp.constraints.rows());
+  Triplets c;
+  for (int r = 0; r < old_rows; ++r)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(qp.constraints, r); it; ++it)
+      c.emplace_back(r, static_cast<int>(it.col()), it.value());
+  Eigen::VectorXd lower(old_rows + rows);
+  lower.head(old_rows) = qp.lower;
+  for (int r = 0; r < rows; ++r) {
+    const int first = (r * 7) % (n - length);
+    for (int j = 0; j < length; ++j) c.emplace_back(old_rows + r, first + j, u(rng));
+    lower[old_rows + r] = 0.2 * u(rng);
+  }
+  qp.constraints.resize(old_rows + rows, n);
+  qp.constraints.setFromTriplets(c.begin(), c.end());
+  qp.lower = lower;
+  return qp;
+}
+
+// The long rows' products are summed column by column of the normal matrix, the columns shared
+// out among threads: one, three or as many as the machine has give the same bits.
+TEST(InteriorPointQP, SameBitsWhateverTheNumberOfThreads) {
+  std::mt19937 rng(5);
+  const SparseQP qp = with_long_rows(repair_like_qp(400, 1.0, rng), 300, 250, rng);
+  Progress progress;
+  QPOptions options;
+  options.threads = 1;
+  const QPResult one = solve_qp_interior_point(qp, options, progress);
+  ASSERT_TRUE(converged(one)) << one.message;
+  for (int threads : {3, 0}) {
+    options.threads = threads;
+    const QPResult many = solve_qp_interior_point(qp, options, progress);
+    ASSERT_EQ(many.iterations, one.iterations) << threads << " threads";
+    for (Eigen::Index i = 0; i < one.x.size(); ++i) ASSERT_EQ(many.x[i], one.x[i]) << threads << " threads";
+  }
+  expect_agrees_with_ipopt(qp, 1.0);
+}
+
 TEST(InteriorPointQP, ConflictingConstraintsFallBackToIpopt) {
   // x >= 1 and -x >= 0 cannot both hold: the interior-point method does not claim a solution, and
   // solve_qp hands the program to Ipopt, which reports it infeasible.

@@ -3,6 +3,9 @@
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "core/blas_kernels.h"
@@ -124,8 +127,10 @@ SpMat kept_columns(const SpMat& m, const Singletons& sg) {
 // column by column of K into a dense column each time.
 class NormalEquations {
  public:
-  NormalEquations(const SpMat& hessian, const Constraints& cs)
-      : cs_(cs),
+  // threads: see QPOptions::threads.
+  NormalEquations(const SpMat& hessian, const Constraints& cs, int threads)
+      : threads_(threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency())),
+        cs_(cs),
         sg_(find_singletons(hessian, cs)),
         hessian_diagonal_(hessian.diagonal()),
         pivot_(Vec::Zero(hessian.rows())) {
@@ -186,6 +191,10 @@ class NormalEquations {
 
  private:
   static constexpr int kStoredRowEntries = 32;
+  // The long rows' products are shared among up to kMaxThreads threads, each with at least
+  // kProductsPerThread of them, so that starting a thread pays.
+  static constexpr int64_t kProductsPerThread = 2000000;
+  static constexpr int kMaxThreads = 8;
 
   int row_entries(int r) const { return ct_kept_.outerIndexPtr()[r + 1] - ct_kept_.outerIndexPtr()[r]; }
 
@@ -238,21 +247,48 @@ class NormalEquations {
   }
 
   // The long rows' products, column by column of K: those of each row entry at or below the
-  // column are summed into a dense column, which is then gathered into K's pattern.
+  // column are summed into a dense column, which is then gathered into K's pattern. Each column's
+  // sums are its own, so the columns are shared out among threads by their products (where there
+  // are enough of them): the same sums in the same order, whatever the number of threads.
   void add_long_row_products(const Vec& w) {
+    const int columns = static_cast<int>(k_.cols());
+    const int64_t enough = long_products_.back() / kProductsPerThread;
+    const int threads = static_cast<int>(std::clamp<int64_t>(std::min<int64_t>(threads_, enough), 1, kMaxThreads));
+    if (threads == 1) return add_long_row_columns(w, 0, columns, column_);
+    std::vector<int> split(threads + 1, columns);
+    split[0] = 0;
+    for (int t = 1; t < threads; ++t)
+      split[t] = static_cast<int>(
+          std::lower_bound(long_products_.begin(), long_products_.end(), long_products_.back() * t / threads) -
+          long_products_.begin());
+    scratch_.resize(threads - 1, std::vector<double>(columns, 0.0));
+    std::vector<std::thread> workers;
+    int started = 1;
+    try {
+      for (; started < threads; ++started)
+        workers.emplace_back([&, t = started] { add_long_row_columns(w, split[t], split[t + 1], scratch_[t - 1]); });
+    } catch (const std::system_error&) {  // no more threads to be had: this one sums the rest
+    }
+    add_long_row_columns(w, split[0], split[1], column_);
+    for (int t = started; t < threads; ++t) add_long_row_columns(w, split[t], split[t + 1], column_);
+    for (std::thread& worker : workers) worker.join();
+  }
+
+  // add_long_row_products for columns [begin, end) of K, with `column` (zero, left zero) to sum in.
+  void add_long_row_columns(const Vec& w, int begin, int end, std::vector<double>& column) {
     const int* row_start = ct_kept_.outerIndexPtr();
     const int* variable = ct_kept_.innerIndexPtr();
     const double* c = ct_kept_.valuePtr();
-    for (int j = 0; j < k_.cols(); ++j) {
+    for (int j = begin; j < end; ++j) {
       if (long_entry_start_[j] == long_entry_start_[j + 1]) continue;
       for (int e = long_entry_start_[j]; e < long_entry_start_[j + 1]; ++e) {
-        const int r = long_entry_row_[e], end = row_start[r + 1];
+        const int r = long_entry_row_[e], stop = row_start[r + 1];
         const double wc = w[r] * c[long_entry_[e]];
-        for (int i = long_entry_[e]; i < end; ++i) column_[variable[i]] += wc * c[i];
+        for (int i = long_entry_[e]; i < stop; ++i) column[variable[i]] += wc * c[i];
       }
       for (int slot = k_.outerIndexPtr()[j]; slot < k_.outerIndexPtr()[j + 1]; ++slot) {
-        k_.valuePtr()[slot] += column_[k_.innerIndexPtr()[slot]];
-        column_[k_.innerIndexPtr()[slot]] = 0;
+        k_.valuePtr()[slot] += column[k_.innerIndexPtr()[slot]];
+        column[k_.innerIndexPtr()[slot]] = 0;
       }
     }
   }
@@ -263,16 +299,22 @@ class NormalEquations {
   void index_long_rows() {
     std::vector<int> cursor(ct_kept_.outerIndexPtr(), ct_kept_.outerIndexPtr() + ct_kept_.cols());
     long_entry_start_.assign(1, 0);
+    long_products_.assign(1, 0);
     for (int j = 0; j < c_kept_.cols(); ++j) {
+      int64_t products = long_products_.back();
       for (SpMat::InnerIterator it(c_kept_, j); it; ++it) {
         const int r = static_cast<int>(it.row()), i = cursor[r]++;
-        if (row_entries(r) > kStoredRowEntries) long_entry_.push_back(i), long_entry_row_.push_back(r);
+        if (row_entries(r) <= kStoredRowEntries) continue;
+        long_entry_.push_back(i), long_entry_row_.push_back(r);
+        products += ct_kept_.outerIndexPtr()[r + 1] - i;
       }
       long_entry_start_.push_back(static_cast<int>(long_entry_.size()));
+      long_products_.push_back(products);
     }
     column_.assign(k_.cols(), 0.0);
   }
 
+  const int threads_;
   const Constraints& cs_;
   const Singletons sg_;
   const Vec hessian_diagonal_;
@@ -281,8 +323,10 @@ class NormalEquations {
   std::vector<double> hessian_values_;                               // H's lower triangle in K's pattern
   std::vector<int> product_slot_;                                    // where each product of a short row goes in K
   std::vector<int> long_entry_start_, long_entry_, long_entry_row_;  // see index_long_rows
-  std::vector<double> column_;                                       // zero between assemblies
-  Vec w_, pivot_;                                                    // the weights and pivots of the last assembly
+  std::vector<int64_t> long_products_;        // the long rows' products in the columns before each column
+  std::vector<double> column_;                // zero between assemblies
+  std::vector<std::vector<double>> scratch_;  // the other threads' columns, zero between assemblies
+  Vec w_, pivot_;                             // the weights and pivots of the last assembly
 };
 
 double max_abs(const Vec& v) { return v.size() ? v.lpNorm<Eigen::Infinity>() : 0.0; }
@@ -308,7 +352,7 @@ class InteriorPoint {
         n_(static_cast<int>(qp.linear.size())),
         cs_(constraint_rows(qp)),
         m_(static_cast<int>(cs_.d.size())),
-        normal_(qp.hessian, cs_) {
+        normal_(qp.hessian, cs_, options.threads) {
     cholesky_.cholmod().print = 0;
     cholesky_.cholmod().nmethods = 1;
     cholesky_.cholmod().method[0].ordering =

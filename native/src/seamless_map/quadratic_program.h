@@ -25,6 +25,9 @@ struct QPOptions {
   double tolerance = 1e-9;
   // Progress fraction range of the current stage covered by this solve.
   double progress_begin = 0, progress_end = 1;
+  // Threads of the interior-point method's normal matrix assembly (0: as many as the machine has,
+  // up to 8). The solution is the same, bit for bit, whatever the number.
+  int threads = 0;
 };
 
 struct QPResult {
