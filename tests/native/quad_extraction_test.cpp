@@ -1179,7 +1179,14 @@ TEST(QuadExtraction, ClosestPointMatchesBruteForce) {
                                     torus.mesh.position(torus.mesh.F(f, 2)));
       best = std::min(best, (q - p).squaredNorm());
     }
-    EXPECT_NEAR(bvh.closest_point(p).squared_distance, best, 1e-12);
+    const TriangleBvh::Hit hit = bvh.closest_point(p);
+    EXPECT_NEAR(hit.squared_distance, best, 1e-12);
+    // The hit names the caller's triangle (the tree keeps its own order of them).
+    ASSERT_GE(hit.triangle, 0);
+    const Vec3 on_hit = closest_point_on_triangle(p, torus.mesh.position(torus.mesh.F(hit.triangle, 0)),
+                                                  torus.mesh.position(torus.mesh.F(hit.triangle, 1)),
+                                                  torus.mesh.position(torus.mesh.F(hit.triangle, 2)));
+    EXPECT_EQ(on_hit, hit.point);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "quad_extraction/surface_projection.h"
 
 #include <algorithm>
+#include <array>
 #include <limits>
 
 namespace qgp {
@@ -69,6 +70,10 @@ TriangleBvh::TriangleBvh(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::R
   if (!triangles_.empty()) build(0, static_cast<int>(items.size()), items);
   order_.resize(items.size());
   for (size_t i = 0; i < items.size(); ++i) order_[i] = items[i].triangle;
+  // The triangles in the leaves' order: a leaf's corners are read without going through order_.
+  std::vector<std::array<int, 3>> in_leaf_order(triangles_.size());
+  for (size_t i = 0; i < order_.size(); ++i) in_leaf_order[i] = triangles_[order_[i]];
+  triangles_ = std::move(in_leaf_order);
 }
 
 static std::vector<std::array<int, 3>> triangles_of(const TriMesh& mesh) {
@@ -109,28 +114,35 @@ TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();
   if (nodes_.empty()) return best;
-  // Depth-first, nearer child first, pruning boxes farther than the best hit.
-  std::vector<int> stack{0};
-  stack.reserve(64);
-  while (!stack.empty()) {
-    const Node& node = nodes_[stack.back()];
-    stack.pop_back();
-    if (node.box.squaredExteriorDistance(p) >= best.squared_distance) continue;
+  // Depth-first, nearer child first, pruning boxes farther than the best hit. Each stacked node
+  // keeps its box's distance, found when its parent was opened. The tree is balanced (median
+  // splits), so the stack holds at most one node per level and the one being opened.
+  struct Stacked {
+    int node;
+    double distance;
+  };
+  std::array<Stacked, kMaxDepth + 2> stack;
+  int top = 0;
+  stack[top++] = {0, nodes_[0].box.squaredExteriorDistance(p)};
+  while (top > 0) {
+    const Stacked next = stack[--top];
+    if (next.distance >= best.squared_distance) continue;
+    const Node& node = nodes_[next.node];
     if (node.left < 0) {
       for (int i = node.begin; i < node.end; ++i) {
-        const auto& t = triangles_[order_[i]];
+        const auto& t = triangles_[i];
         const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
         const double d = (q - p).squaredNorm();
         if (d < best.squared_distance) best = Hit{order_[i], q, d};
       }
       continue;
     }
-    const double dl = nodes_[node.left].box.squaredExteriorDistance(p);
-    const double dr = nodes_[node.right].box.squaredExteriorDistance(p);
-    if (dl < dr) {
-      stack.push_back(node.right), stack.push_back(node.left);
+    const Stacked left{node.left, nodes_[node.left].box.squaredExteriorDistance(p)};
+    const Stacked right{node.right, nodes_[node.right].box.squaredExteriorDistance(p)};
+    if (left.distance < right.distance) {
+      stack[top++] = right, stack[top++] = left;
     } else {
-      stack.push_back(node.left), stack.push_back(node.right);
+      stack[top++] = left, stack[top++] = right;
     }
   }
   return best;

@@ -40,10 +40,12 @@ class TriangleBvh {
     int triangle;
   };
   int build(int begin, int end, std::vector<Item>& items);
+  // Median splits: the depth is at most log2 of the triangle count (below 31).
+  static constexpr int kMaxDepth = 32;
 
   std::vector<Vec3> vertices_;
-  std::vector<std::array<int, 3>> triangles_;
-  std::vector<int> order_;
+  std::vector<std::array<int, 3>> triangles_;  // in the leaves' order once built...
+  std::vector<int> order_;                     // ...triangles_[i] is the caller's triangle order_[i]
   std::vector<Node> nodes_;
 };
 
