@@ -80,10 +80,13 @@ class CandidateSearch {
   // Each corner, then the points of the side before it where two terms are equal. True once the
   // best reaches the ceiling.
   bool corners_and_sides() {
+    at_corner_.resize(8 * m_);
+    for (int k = 0; k < 8; ++k)
+      for (size_t i = 0; i < m_; ++i) at_corner_[k * m_ + i] = term(i, octagon_.corner[k]);
     for (int k = 0; k < 8; ++k) {
       if (consider(octagon_.corner[k])) return true;
       const Vec2 a = octagon_.corner[(k + 7) % 8], b = octagon_.corner[k];
-      index_side(a, b);
+      index_side((k + 7) % 8, k);
       for (size_t p = 0; p < alive_.size(); ++p) {
         const size_t i = alive_[p];
         for (size_t q = p + 1; q < alive_.size(); ++q) {
@@ -99,14 +102,13 @@ class CandidateSearch {
     }
     return false;
   }
-  // Each term at the ends a, b of a side; alive_: the terms above_best_on_side, in order.
-  void index_side(const Vec2& a, const Vec2& b) {
-    at_a_.resize(m_), at_b_.resize(m_);
+  // The side from corner a to corner b: each term at its ends (at_a_, at_b_) and alive_, the terms
+  // above_best_on_side, in order.
+  void index_side(int a, int b) {
+    at_a_ = &at_corner_[a * m_], at_b_ = &at_corner_[b * m_];
     alive_.clear();
-    for (size_t i = 0; i < m_; ++i) {
-      at_a_[i] = term(i, a), at_b_[i] = term(i, b);
+    for (size_t i = 0; i < m_; ++i)
       if (above_best_on_side(i)) alive_.push_back(i);
-    }
   }
   // Skipping the candidates these two rule out leaves the answer unchanged (the best value only
   // grows). False where term i may not exceed the best value anywhere on the side (a candidate must
@@ -144,7 +146,8 @@ class CandidateSearch {
   Vec2 best_ = Vec2::Zero();
   double best_value_ = 0;
   size_t first_ = 0;
-  std::vector<double> at_a_, at_b_;  // see index_side
+  std::vector<double> at_corner_;                   // each term at each corner, corner by corner
+  const double *at_a_ = nullptr, *at_b_ = nullptr;  // see index_side
   std::vector<size_t> alive_;
 };
 

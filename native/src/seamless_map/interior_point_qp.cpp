@@ -251,26 +251,16 @@ class NormalEquations {
   // sums are its own, so the columns are shared out among threads by their products (where there
   // are enough of them): the same sums in the same order, whatever the number of threads.
   void add_long_row_products(const Vec& w) {
-    const int columns = static_cast<int>(k_.cols());
-    const int64_t enough = long_products_.back() / kProductsPerThread;
-    const int threads = static_cast<int>(std::clamp<int64_t>(std::min<int64_t>(threads_, enough), 1, kMaxThreads));
-    if (threads == 1) return add_long_row_columns(w, 0, columns, column_);
-    std::vector<int> split(threads + 1, columns);
-    split[0] = 0;
-    for (int t = 1; t < threads; ++t)
-      split[t] = static_cast<int>(
-          std::lower_bound(long_products_.begin(), long_products_.end(), long_products_.back() * t / threads) -
-          long_products_.begin());
-    scratch_.resize(threads - 1, std::vector<double>(columns, 0.0));
+    const int threads = static_cast<int>(split_.size()) - 1;
     std::vector<std::thread> workers;
     int started = 1;
     try {
       for (; started < threads; ++started)
-        workers.emplace_back([&, t = started] { add_long_row_columns(w, split[t], split[t + 1], scratch_[t - 1]); });
+        workers.emplace_back([&, t = started] { add_long_row_columns(w, split_[t], split_[t + 1], scratch_[t - 1]); });
     } catch (const std::system_error&) {  // no more threads to be had: this one sums the rest
     }
-    add_long_row_columns(w, split[0], split[1], column_);
-    for (int t = started; t < threads; ++t) add_long_row_columns(w, split[t], split[t + 1], column_);
+    add_long_row_columns(w, split_[0], split_[1], column_);
+    for (int t = started; t < threads; ++t) add_long_row_columns(w, split_[t], split_[t + 1], column_);
     for (std::thread& worker : workers) worker.join();
   }
 
@@ -312,6 +302,21 @@ class NormalEquations {
       long_products_.push_back(products);
     }
     column_.assign(k_.cols(), 0.0);
+    share_out_long_rows();
+  }
+
+  // split_: the columns of each thread of add_long_row_products, with about equal products.
+  void share_out_long_rows() {
+    const int columns = static_cast<int>(k_.cols());
+    const int64_t enough = long_products_.back() / kProductsPerThread;
+    const int threads = static_cast<int>(std::clamp<int64_t>(std::min<int64_t>(threads_, enough), 1, kMaxThreads));
+    split_.assign(threads + 1, columns);
+    split_[0] = 0;
+    for (int t = 1; t < threads; ++t)
+      split_[t] = static_cast<int>(
+          std::lower_bound(long_products_.begin(), long_products_.end(), long_products_.back() * t / threads) -
+          long_products_.begin());
+    scratch_.assign(threads - 1, std::vector<double>(columns, 0.0));
   }
 
   const int threads_;
@@ -324,6 +329,7 @@ class NormalEquations {
   std::vector<int> product_slot_;                                    // where each product of a short row goes in K
   std::vector<int> long_entry_start_, long_entry_, long_entry_row_;  // see index_long_rows
   std::vector<int64_t> long_products_;        // the long rows' products in the columns before each column
+  std::vector<int> split_;                    // thread t sums columns [split_[t], split_[t + 1])
   std::vector<double> column_;                // zero between assemblies
   std::vector<std::vector<double>> scratch_;  // the other threads' columns, zero between assemblies
   Vec w_, pivot_;                             // the weights and pivots of the last assembly
