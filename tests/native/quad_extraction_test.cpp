@@ -6,16 +6,19 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
 #include <random>
 #include <set>
+#include <thread>
 
 #include <Eigen/Sparse>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/timer.h"
 #include "cross_field/cross_field.h"
 #include "igm/integer_grid_map.h"
@@ -1285,6 +1288,31 @@ TEST(QuadMetrics, AQuadIsJudgedAgainstItsOwnPart) {
   EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 0);  // its own part
   quad.component = {1};  // claimed by the part facing -z, it is flipped
   EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 1);
+}
+
+// The Hausdorff distance's samples are shared out among threads (core/parallel.h): every chunk
+// runs once, whatever the threads, and an exception of the calling thread's chunk (a cancel) leaves
+// only after the other threads have finished theirs.
+TEST(Parallel, EveryChunkRunsOnceAndTheThreadsAreJoinedBeforeAnExceptionLeaves) {
+  EXPECT_EQ(threads_for(100, 1000), 1);
+  EXPECT_EQ(threads_for(1e9, 1, 3), 3);
+  EXPECT_EQ(threads_for(1e9, 1, 64), 8);
+  for (int chunks : {1, 2, 5}) {
+    std::vector<std::atomic<int>> runs(chunks);
+    run_chunks(chunks, [&](int t) { ++runs[t]; });
+    for (int t = 0; t < chunks; ++t) EXPECT_EQ(runs[t], 1) << chunks << " chunks, chunk " << t;
+  }
+  std::vector<std::atomic<int>> finished(4);
+  try {
+    run_chunks(4, [&](int t) {
+      if (t == 0) throw Error(ErrorCode::Cancelled, "cancelled");
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      ++finished[t];
+    });
+    ADD_FAILURE() << "the exception of chunk 0 was lost";
+  } catch (const Error&) {
+    for (int t = 1; t < 4; ++t) EXPECT_EQ(finished[t], 1) << "chunk " << t << " had not finished";
+  }
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <random>
 #include <unordered_map>
 
+#include "core/parallel.h"
 #include "quad_extraction/surface_projection.h"
 
 namespace qgp {
@@ -114,13 +115,22 @@ std::vector<Vec3> sample_surface(const std::vector<Vec3>& V, const std::vector<s
   return samples;
 }
 
+// Samples per thread below which max_distance starts no more threads.
+constexpr double kMinSamplesPerThread = 2000;
+
+// The largest distance from the samples to the target, the samples shared out among threads in
+// ranges (a maximum is the same in any order). Only the calling thread checks for a cancel.
 double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target, Progress& progress) {
-  double worst = 0;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    if ((i & 1023) == 0) progress.check_cancel();
-    worst = std::max(worst, target.closest_point(samples[i]).squared_distance);
-  }
-  return std::sqrt(worst);
+  const int chunks = threads_for(double(samples.size()), kMinSamplesPerThread);
+  std::vector<double> worst(chunks, 0.0);
+  run_chunks(chunks, [&](int t) {
+    const size_t begin = samples.size() * t / chunks, end = samples.size() * (t + 1) / chunks;
+    for (size_t i = begin; i < end; ++i) {
+      if (t == 0 && ((i - begin) & 1023) == 0) progress.check_cancel();
+      worst[t] = std::max(worst[t], target.closest_point(samples[i]).squared_distance);
+    }
+  });
+  return std::sqrt(*std::max_element(worst.begin(), worst.end()));
 }
 
 Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {

@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <system_error>
 #include <thread>
 #include <vector>
 
 #include "core/blas_kernels.h"
 #include "core/error.h"
+#include "core/parallel.h"
 
 namespace qgp {
 namespace {
@@ -251,17 +251,8 @@ class NormalEquations {
   // sums are its own, so the columns are shared out among threads by their products (where there
   // are enough of them): the same sums in the same order, whatever the number of threads.
   void add_long_row_products(const Vec& w) {
-    const int threads = static_cast<int>(split_.size()) - 1;
-    std::vector<std::thread> workers;
-    int started = 1;
-    try {
-      for (; started < threads; ++started)
-        workers.emplace_back([&, t = started] { add_long_row_columns(w, split_[t], split_[t + 1], scratch_[t - 1]); });
-    } catch (const std::system_error&) {  // no more threads to be had: this one sums the rest
-    }
-    add_long_row_columns(w, split_[0], split_[1], column_);
-    for (int t = started; t < threads; ++t) add_long_row_columns(w, split_[t], split_[t + 1], column_);
-    for (std::thread& worker : workers) worker.join();
+    run_chunks(static_cast<int>(split_.size()) - 1,
+               [&](int t) { add_long_row_columns(w, split_[t], split_[t + 1], t == 0 ? column_ : scratch_[t - 1]); });
   }
 
   // add_long_row_products for columns [begin, end) of K, with `column` (zero, left zero) to sum in.
