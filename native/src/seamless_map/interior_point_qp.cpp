@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <thread>
 #include <vector>
 
 #include "core/blas_kernels.h"
@@ -129,7 +128,7 @@ class NormalEquations {
  public:
   // threads: see QPOptions::threads.
   NormalEquations(const SpMat& hessian, const Constraints& cs, int threads)
-      : threads_(threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency())),
+      : threads_(threads),
         cs_(cs),
         sg_(find_singletons(hessian, cs)),
         hessian_diagonal_(hessian.diagonal()),
@@ -191,10 +190,9 @@ class NormalEquations {
 
  private:
   static constexpr int kStoredRowEntries = 32;
-  // The long rows' products are shared among up to kMaxThreads threads, each with at least
+  // The long rows' products are shared among threads (threads_for: up to 8), each with at least
   // kProductsPerThread of them, so that starting a thread pays.
-  static constexpr int64_t kProductsPerThread = 2000000;
-  static constexpr int kMaxThreads = 8;
+  static constexpr double kProductsPerThread = 2000000;
 
   int row_entries(int r) const { return ct_kept_.outerIndexPtr()[r + 1] - ct_kept_.outerIndexPtr()[r]; }
 
@@ -299,8 +297,7 @@ class NormalEquations {
   // split_: the columns of each thread of add_long_row_products, with about equal products.
   void share_out_long_rows() {
     const int columns = static_cast<int>(k_.cols());
-    const int64_t enough = long_products_.back() / kProductsPerThread;
-    const int threads = static_cast<int>(std::clamp<int64_t>(std::min<int64_t>(threads_, enough), 1, kMaxThreads));
+    const int threads = threads_for(static_cast<double>(long_products_.back()), kProductsPerThread, threads_);
     split_.assign(threads + 1, columns);
     split_[0] = 0;
     for (int t = 1; t < threads; ++t)
@@ -310,7 +307,7 @@ class NormalEquations {
     scratch_.assign(threads - 1, std::vector<double>(columns, 0.0));
   }
 
-  const int threads_;
+  const int threads_;  // QPOptions::threads (0: the machine's count)
   const Constraints& cs_;
   const Singletons sg_;
   const Vec hessian_diagonal_;
