@@ -1270,13 +1270,13 @@ TEST(QuadMetrics, AQuadIsJudgedAgainstItsOwnPart) {
   TriMesh two;
   two.V.resize(8, 3);
   two.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,         // part 0 at z = 0, normal +z
-      0, 0, 0.01, 1, 0, 0.01, 1, 1, 0.01, 0, 1, 0.01;  // part 1 at z = 0.01, normal -z
+      0, 0, 0.05, 1, 0, 0.05, 1, 1, 0.05, 0, 1, 0.05;  // part 1 at z = 0.05, normal -z
   two.F.resize(4, 3);
   two.F << 0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6;
   build_connectivity(two);
   QuadMesh quad;
   quad.V.resize(4, 3);
-  quad.V << 0.2, 0.2, 0.006, 0.8, 0.2, 0.006, 0.8, 0.8, 0.006, 0.2, 0.8, 0.006;  // normal +z, nearer part 1
+  quad.V << 0.2, 0.2, 0.03, 0.8, 0.2, 0.03, 0.8, 0.8, 0.03, 0.2, 0.8, 0.03;  // normal +z, nearer part 1
   quad.Q.resize(1, 4);
   quad.Q << 0, 1, 2, 3;
   quad.component = {0};
@@ -1288,6 +1288,74 @@ TEST(QuadMetrics, AQuadIsJudgedAgainstItsOwnPart) {
   EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 0);  // its own part
   quad.component = {1};  // claimed by the part facing -z, it is flipped
   EXPECT_EQ(compute_quad_metrics(quad, two, options, progress).flipped_quads(), 1);
+}
+
+// Two solids in face contact leave two coincident sheets facing opposite ways, tessellated
+// differently (cycloidal's rings and pins): a quad on them faces with one of them and is not
+// flipped, either way it faces. On one sheet alone, the quad facing against it is.
+TEST(QuadMetrics, CoincidentSheetsFacingOppositeWaysFlipNoQuad) {
+  TriMesh sheets;
+  sheets.V.resize(9, 3);
+  sheets.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,                      // sheet up: two triangles
+      0, 0, 1e-9, 1, 0, 1e-9, 1, 1, 1e-9, 0, 1, 1e-9, 0.5, 0.5, 1e-9;  // sheet down: a fan of four
+  sheets.F.resize(6, 3);
+  sheets.F << 0, 1, 2, 0, 2, 3, 4, 8, 5, 5, 8, 6, 6, 8, 7, 7, 8, 4;
+  build_connectivity(sheets);
+  const TriangleBvh bvh(sheets);
+  Vec3 up[4] = {{0.2, 0.2, 0}, {0.8, 0.2, 0}, {0.8, 0.8, 0}, {0.2, 0.8, 0}};
+  Vec3 down[4] = {up[0], up[3], up[2], up[1]};
+  EXPECT_FALSE(quad_is_flipped(up, sheets, bvh));
+  EXPECT_FALSE(quad_is_flipped(down, sheets, bvh));
+  const Vec3 x(0.3, 0.6, 1e-3);
+  EXPECT_GT(sheets.face_normal_unnormalized(bvh.closest_point_facing(x, Vec3::UnitZ(), 1e-3).triangle).z(), 0);
+  EXPECT_LT(sheets.face_normal_unnormalized(bvh.closest_point_facing(x, -Vec3::UnitZ(), 1e-3).triangle).z(), 0);
+
+  TriMesh one;
+  one.V = sheets.V.topRows(4);
+  one.F = sheets.F.topRows(2);
+  build_connectivity(one);
+  const TriangleBvh one_bvh(one);
+  EXPECT_FALSE(quad_is_flipped(up, one, one_bvh));
+  EXPECT_TRUE(quad_is_flipped(down, one, one_bvh));
+}
+
+// Across a crease the closest point lies on the shared edge, as close to both triangles: the
+// facing query keeps the closest one there (a crease is no second sheet), so a quad folded over a
+// crease stays flipped. A sheet folded back onto itself is two sheets. Elsewhere it is the closest
+// point within the tolerance, facing with the normal asked where any such is.
+TEST(QuadExtraction, ClosestPointFacingSwitchesOnlyToASheetFacingTheOtherWay) {
+  TriMesh crease;
+  crease.V.resize(4, 3);
+  crease.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;  // the faces z = 0 and y = 0 meeting along x
+  crease.F.resize(2, 3);
+  crease.F << 0, 2, 1, 0, 1, 3;
+  build_connectivity(crease);
+  const TriangleBvh bvh(crease);
+  const Vec3 outside(0.3, -0.1, -0.1);  // nearest the shared edge
+  const TriangleBvh::Hit closest = bvh.closest_point(outside);
+  for (const Vec3& n : {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(0, 1, 0), Vec3(0, -1, 0)})
+    EXPECT_EQ(bvh.closest_point_facing(outside, n, 0.5).triangle, closest.triangle);
+
+  TriMesh fold = crease;  // the second face folded over onto the first: the same triangle, facing +z
+  fold.V.row(3) << 0, 1, 0;
+  build_connectivity(fold);
+  const TriangleBvh fold_bvh(fold);
+  const Vec3 above(0.3, 0.3, 1e-3);  // as close to both sheets
+  EXPECT_EQ(fold_bvh.closest_point_facing(above, Vec3(0, 0, 1), 0.1).triangle, 1);
+  EXPECT_EQ(fold_bvh.closest_point_facing(above, Vec3(0, 0, -1), 0.1).triangle, 0);
+
+  const auto torus = test::make_grid_torus(20, 12);
+  const TriangleBvh torus_bvh(torus.mesh);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-5, 5);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 p(u(rng), u(rng), u(rng) / 2), n = Vec3(u(rng), u(rng), u(rng)).normalized();
+    const double tolerance = 0.05;
+    const TriangleBvh::Hit best = torus_bvh.closest_point(p), facing = torus_bvh.closest_point_facing(p, n, tolerance);
+    ASSERT_GE(facing.triangle, 0);
+    EXPECT_LE(std::sqrt(facing.squared_distance), std::sqrt(best.squared_distance) + tolerance + 1e-12);
+    if (facing.triangle != best.triangle) EXPECT_GT(torus.mesh.face_normal_unnormalized(facing.triangle).dot(n), 0);
+  }
 }
 
 // The Hausdorff distance's samples are shared out among threads (core/parallel.h): every chunk

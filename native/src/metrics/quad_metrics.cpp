@@ -136,12 +136,15 @@ double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target,
 Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
   // Interior points of the bilinear quad (unlike corners on a sharp edge) have an unambiguous
   // closest triangle when the quad lies on the surface.
+  // Where coincident sheets face opposite ways, the one facing with the quad counts.
+  const Vec3 normal = (p[2] - p[0]).cross(p[3] - p[1]);
+  const double tolerance = kCoincidentSheets * std::max((p[2] - p[0]).norm(), (p[3] - p[1]).norm());
   Vec3 sum = Vec3::Zero();
   const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}};
   for (const auto& st : at) {
     const Vec3 x = (1 - st[0]) * (1 - st[1]) * p[0] + st[0] * (1 - st[1]) * p[1] + st[0] * st[1] * p[2] +
                    (1 - st[0]) * st[1] * p[3];
-    const TriangleBvh::Hit hit = reference_bvh.closest_point(x);
+    const TriangleBvh::Hit hit = reference_bvh.closest_point_facing(x, normal, tolerance);
     if (hit.triangle >= 0) sum += reference.face_normal_unnormalized(hit.triangle).normalized();
   }
   return sum;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
+#include <utility>
 
 namespace qgp {
 
@@ -110,10 +112,13 @@ int TriangleBvh::build(int begin, int end, std::vector<Item>& items) {
   return id;
 }
 
-TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
+TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const { return closest_leaf(p).first; }
+
+std::pair<TriangleBvh::Hit, int> TriangleBvh::closest_leaf(const Vec3& p) const {
   Hit best;
+  int leaf = -1;
   best.squared_distance = std::numeric_limits<double>::infinity();
-  if (nodes_.empty()) return best;
+  if (nodes_.empty()) return {best, leaf};
   // Depth-first, nearer child first, pruning boxes farther than the best hit. Each stacked node
   // keeps its box's distance, found when its parent was opened. The tree is balanced (median
   // splits), so the stack holds at most one node per level and the one being opened.
@@ -133,7 +138,7 @@ TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
         const auto& t = triangles_[i];
         const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
         const double d = (q - p).squaredNorm();
-        if (d < best.squared_distance) best = Hit{order_[i], q, d};
+        if (d < best.squared_distance) best = Hit{order_[i], q, d}, leaf = i;
       }
       continue;
     }
@@ -145,7 +150,51 @@ TriangleBvh::Hit TriangleBvh::closest_point(const Vec3& p) const {
       stack[top++] = left, stack[top++] = right;
     }
   }
-  return best;
+  return {best, leaf};
+}
+
+template <class Visit>
+void TriangleBvh::for_each_near(const Vec3& p, double squared_radius, Visit&& visit) const {
+  if (nodes_.empty()) return;
+  std::array<int, kMaxDepth + 2> stack;
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (node.box.squaredExteriorDistance(p) > squared_radius) continue;
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) visit(i);
+      continue;
+    }
+    stack[top++] = node.right, stack[top++] = node.left;
+  }
+}
+
+Vec3 TriangleBvh::normal(int i) const {
+  const auto& t = triangles_[i];
+  return (vertices_[t[1]] - vertices_[t[0]]).cross(vertices_[t[2]] - vertices_[t[0]]);
+}
+
+bool TriangleBvh::face_opposite_ways(int i, int j) const {
+  const Vec3 a = normal(i), b = normal(j);
+  return a.dot(b) < -kOppositeSheets * a.norm() * b.norm();
+}
+
+TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& normal_wanted, double tolerance) const {
+  const auto [closest, first] = closest_leaf(p);
+  if (first < 0) return closest;
+  if (normal(first).dot(normal_wanted) > 0) return closest;
+  const double reach = std::sqrt(closest.squared_distance) + tolerance;
+  Hit best;
+  best.squared_distance = reach * reach;
+  for_each_near(p, reach * reach, [&](int i) {
+    if (!(normal(i).dot(normal_wanted) > 0) || !face_opposite_ways(i, first)) return;
+    const auto& t = triangles_[i];
+    const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
+    const double d = (q - p).squaredNorm();
+    if (d <= best.squared_distance) best = Hit{order_[i], q, d};
+  });
+  return best.triangle >= 0 ? best : closest;
 }
 
 template <int K>

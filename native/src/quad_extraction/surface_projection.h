@@ -2,6 +2,7 @@
 // vertices back onto the original surface when they come from a working mesh (decimated or remeshed).
 #pragma once
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "core/mesh.h"
@@ -24,6 +25,13 @@ class TriangleBvh {
   };
   // Closest point of the surface to p (triangle -1 if the surface is empty).
   Hit closest_point(const Vec3& p) const;
+  // The closest point of the surface to p, except where its triangle faces against `normal` and
+  // another sheet lies as close (at most `tolerance` farther), facing the opposite way (normals
+  // more than acos(kOppositeSheets) apart) and so with `normal`: then that one's point (the nearest
+  // such). Two solids in face contact (cycloidal's rings and pins, sharing vertices but not
+  // triangles there) leave two coincident sheets facing opposite ways; a quad on them faces with
+  // one of them. Across a crease (normals less far apart) the closest point stays.
+  Hit closest_point_facing(const Vec3& p, const Vec3& normal, double tolerance) const;
 
   int num_triangles() const { return static_cast<int>(triangles_.size()); }
 
@@ -40,6 +48,14 @@ class TriangleBvh {
     int triangle;
   };
   int build(int begin, int end, std::vector<Item>& items);
+  // The closest hit and its leaf-ordered triangle (-1 for an empty surface).
+  std::pair<Hit, int> closest_leaf(const Vec3& p) const;
+  // Calls visit(i) for each leaf-ordered triangle i whose box lies within squared_radius of p.
+  template <class Visit>
+  void for_each_near(const Vec3& p, double squared_radius, Visit&& visit) const;
+  Vec3 normal(int i) const;                     // of leaf-ordered triangle i, not normalized
+  bool face_opposite_ways(int i, int j) const;  // leaf-ordered triangles, kOppositeSheets
+  static constexpr double kOppositeSheets = 0.9;
   // Median splits: the depth is at most log2 of the triangle count (below 31).
   static constexpr int kMaxDepth = 32;
 
