@@ -35,11 +35,13 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   const Json& report = session.report();
   EXPECT_EQ(report["status"], "ok") << name;
   // Exactly the quads the quantization promised, over all components, less those the collapse of
-  // flipped quads and slivers removed (policy.h: collapse_folds).
+  // flipped quads and slivers removed (policy.h: collapse_folds). A rescued part's quads come from
+  // another run than the one the stage reports describe (rescued_components gives their count).
   int64_t removed = 0;
   if (report["extraction"].contains("collapsed"))
     for (const Json& c : report["extraction"]["collapsed"]) removed += c["removed_quads"].get<int64_t>();
-  EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>() - removed) << name;
+  if (!report.contains("rescued_components"))
+    EXPECT_EQ(quads->num_quads(), report["quantization"]["quads_expected"].get<int64_t>() - removed) << name;
   EXPECT_EQ(session.quad_source_face().size(), static_cast<size_t>(quads->num_quads())) << name;
   for (int f : session.quad_source_face()) {
     EXPECT_GE(f, 0) << name;
@@ -304,7 +306,9 @@ TEST(SessionPipeline, AQuadJobDoesNotRepairAMapThatCannotBeRegular) {
 // and gives the quads. Before the elimination dropped the rounding residue of non-integer pivots
 // (kZeroCoefficient), 539 of its imposed integer equations counted as inconsistent, the map broke
 // its rows by 149 quad units (area 25 079 for 1 951 quads), stayed flipped after 10 repair rounds
-// (12 s), and the quads came from the T-mesh layout.
+// (12 s), and the quads came from the T-mesh layout. (Since its quads lie 0.8 quad edges off its
+// coarse triangles, the part is then quadded again on an isotropic remesh: the report's stages are
+// those of the run on its own triangles.)
 TEST(SessionPipeline, BlocksIntegerGridMapMeetsItsQuantization) {
   Session session(read_mesh_file(test::mesh_path("block.obj")));
   ASSERT_NO_FATAL_FAILURE(run_completed(session, Job::Remesh, 2000, 60));
@@ -346,8 +350,8 @@ TEST(SessionPipeline, AQuadJobLeavesAStalledRepairToTheUntangle) {
 // map again, and the cross field too (its close singularity pairs depend on the edge length,
 // policy.h kCancelPairsWithin): block at 40 degrees, 500 then 8000 quads, ends as a fresh run at
 // 8000 does (rescaled by 4 it had 6 658 quads and 1.35 % Hausdorff distance instead of 6 526 and
-// 0.83 %; since the count asked is kept, a fresh run has 7 990 quads and 1.25 %, measured
-// 2026-11-27).
+// 0.83 %; since the count asked is kept, a fresh run had 7 990 quads and 1.25 %, measured
+// 2026-11-27; on an isotropic remesh of its coarse triangles since 2026-12-07, 0.11 %).
 TEST(SessionPipeline, LargeDensityChangeSolvesTheSeamlessMapAgain) {
   Session fresh(read_mesh_file(test::mesh_path("block.obj")));
   ASSERT_NO_FATAL_FAILURE(run_completed(fresh, Job::Remesh, 8000, 40));
@@ -364,7 +368,7 @@ TEST(SessionPipeline, LargeDensityChangeSolvesTheSeamlessMapAgain) {
   ASSERT_NE(fresh.quad_result(), nullptr);
   EXPECT_EQ(session.quad_result()->num_quads(), fresh.quad_result()->num_quads());
   const PolygonMeshMetrics m = expect_valid_output("block", session, 40);
-  EXPECT_LE(m.quad.hausdorff, 0.0125);
+  EXPECT_LE(m.quad.hausdorff, 0.01);
 }
 
 // A dense input (face.obj, 51 712 triangles) is remeshed on a decimated working mesh; the quads
@@ -651,9 +655,9 @@ std::vector<std::string> sweep(const std::vector<std::pair<std::string, double>>
       }
       const PolygonMeshMetrics m = expect_valid_output(name, session, sharp, known_flipped_quads(name, sharp, target));
       expect_count_asked_for(name + "@" + std::to_string(static_cast<int>(target)), session.report(), target);
-      // Within 1 % at 8 000 quads; block at 40 degrees: 1.25 % (7 990 quads since the count is kept;
-      // it had about 6 600 and 0.83 % at the density's own scale; measured 2026-11-27).
-      if (target >= 8000) EXPECT_LE(m.quad.hausdorff, name == "block.obj" && sharp > 0 ? 0.0125 : 0.01) << name;
+      // Within 1 % at 8 000 quads (block at 40 degrees came 1.21 % off on its own coarse triangles:
+      // its quads now come from an isotropic remesh of them, 0.11 %).
+      if (target >= 8000) EXPECT_LE(m.quad.hausdorff, 0.01) << name;
       const bool from_layout = session.report()["extraction"]["layout_components"].get<int>() > 0;
       if (!either_source(name, target))
         EXPECT_EQ(from_layout, quads_expected_from_layout(name, sharp, target))
@@ -703,6 +707,33 @@ TEST(SessionMeshes, MoreMeshesBecomeValidQuadMeshesAt2000) {
 TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
   const std::vector<std::string> failed = sweep({{"block.obj", 40}}, {2000, 8000});
   EXPECT_TRUE(failed.empty()) << joined(failed);
+}
+
+// Block's triangles are far larger than a quad at 2 000 and 8 000 quads (its top disc a fan of 32
+// around one inner vertex): on them the map lays most of the disc's sharp rim on one straight
+// isoline and the quads cut across the rim (2.33 % and 1.21 % of the diagonal, 0.8-0.9 quad edges).
+// The part is quadded again on an isotropic remesh (policy.h: kMaxQuadDistanceInEdges), whose quads
+// lie within 0.3 % (0.25 % and 0.11 % measured) with the same 48 irregular vertices; a new density
+// in the same session keeps that remesh. At 500 quads its triangles are not over two quad edges
+// long and it keeps them (5.4 % off: docs/limitations.md).
+TEST(SessionMeshes, QuadsFarOffACoarseCadPartComeFromARemesh) {
+  Session at_500(read_mesh_file(test::mesh_path("block.obj")));
+  run_completed(at_500, Job::Remesh, 500, 40);
+  EXPECT_FALSE(at_500.report().contains("rescued_components"));
+  EXPECT_EQ(at_500.report()["working_mesh"]["remeshed_components"], 0);
+  Session redo(read_mesh_file(test::mesh_path("block.obj")));
+  for (double target : {2000.0, 8000.0}) {
+    Session session(read_mesh_file(test::mesh_path("block.obj")));
+    run_completed(session, Job::Remesh, target, 40);
+    const Json& report = session.report();
+    ASSERT_TRUE(report.contains("rescued_components")) << target;
+    EXPECT_EQ(report["rescued_components"][0]["rescue"], "isotropic working mesh");
+    EXPECT_EQ(report["working_mesh"]["remeshed_components"], 1) << target;
+    EXPECT_LE(expect_valid_output("block.obj", session, 40, 0).quad.hausdorff, 0.003) << target;
+    run_completed(redo, Job::Remesh, target, 40);  // 2 000, then 8 000 in the same session
+    EXPECT_EQ(redo.report()["working_mesh"]["remeshed_components"], 1) << target;
+    EXPECT_LE(expect_valid_output("block.obj", redo, 40, 0).quad.hausdorff, 0.003) << target;
+  }
 }
 
 // CAD parts whose triangles are mostly needles, with their sharp edges. featuretype's seamless map

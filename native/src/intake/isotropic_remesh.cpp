@@ -431,4 +431,16 @@ double needle_area_share(const TriMesh& mesh) {
   return total > 0 ? needles / total : 0.0;
 }
 
+double coarse_area_share(const TriMesh& mesh, double edge_length) {
+  double coarse = 0, total = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const double area = 0.5 * mesh.face_normal_unnormalized(f).norm();
+    total += area;
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, mesh.edge_vector(3 * f + k).norm());
+    if (longest > edge_length) coarse += area;
+  }
+  return total > 0 ? coarse / total : 0.0;
+}
+
 }  // namespace qgp

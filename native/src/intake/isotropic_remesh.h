@@ -43,5 +43,7 @@ std::optional<RemeshedSurface> remesh_isotropic(const TriMesh& mesh, const std::
 // kNeedleAngleDeg (0 for a mesh without area).
 constexpr double kNeedleAngleDeg = 5;
 double needle_area_share(const TriMesh& mesh);
+// Share of the mesh's area in triangles with an edge longer than edge_length.
+double coarse_area_share(const TriMesh& mesh, double edge_length);
 
 }  // namespace qgp

@@ -50,8 +50,18 @@ bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& f
          needle_area_share(mesh) > kRemeshAboveNeedleShare;
 }
 
-int remesh_face_budget(double target_quads, double area_share) {
-  const double faces = std::max(kWorkingFacesPerQuad * target_quads, kMinWorkingFaces * area_share);
+bool has_coarse_triangles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges,
+                                          double edge_length) {
+  return std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end() &&
+         coarse_area_share(mesh, kCoarseEdgeInQuads * edge_length) > kRemeshAboveNeedleShare;
+}
+
+double remesh_faces_per_quad(const TriMesh& mesh, const std::vector<char>& feature_edges) {
+  return has_needles_across_features(mesh, feature_edges) ? kWorkingFacesPerQuad : kCoarseRemeshFacesPerQuad;
+}
+
+int remesh_face_budget(double target_quads, double area_share, double faces_per_quad) {
+  const double faces = std::max(faces_per_quad * target_quads, kMinWorkingFaces * area_share);
   return static_cast<int>(std::min(std::max(faces, 1.0), 1e9));  // NaN: 1
 }
 

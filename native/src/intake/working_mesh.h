@@ -31,9 +31,9 @@ int working_face_budget(double target_quads);
 constexpr int kWorkingFacesPerQuad = 5;
 constexpr int kMinWorkingFaces = 20000;
 // Face count of an isotropic working mesh for about `target_quads` quads on a component with this
-// share of the mesh's area: a fixed number of triangles per quad, never below its share of
+// share of the mesh's area: faces_per_quad triangles per quad, never below its share of
 // kMinWorkingFaces (so that a many-part CAD model is not remeshed to kMinWorkingFaces per part).
-int remesh_face_budget(double target_quads, double area_share);
+int remesh_face_budget(double target_quads, double area_share, double faces_per_quad);
 // Only components with more than this many times their budget are decimated (below, the gain in
 // time is small and the input's own triangles are the better surface).
 constexpr double kDecimateAboveBudget = 2;
@@ -43,6 +43,20 @@ constexpr double kDecimateAboveBudget = 2;
 // (featuretype with edges over 40 degrees: 15 flipped triangles, so no quads).
 constexpr double kRemeshAboveNeedleShare = 0.1;
 bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges);
+// Likewise a component with feature edges whose triangles with an edge longer than
+// kCoarseEdgeInQuads quad edges (edge_length) cover more than that share of its area: the map is
+// linear on each triangle, so where a few large triangles fan around one inner vertex the field
+// can turn only there (block with edges over 40 degrees at 8 000 quads: a rim of 32 edges around
+// a fan of 32 triangles laid on one straight isoline for 29 of them, 1.21 % of the diagonal off).
+// Such a part is remeshed to kCoarseRemeshFacesPerQuad triangles per quad (floored as below):
+// triangles about a quad's size are enough there, and cost less than the needles' count.
+constexpr double kCoarseEdgeInQuads = 2;
+constexpr double kCoarseRemeshFacesPerQuad = 2;
+bool has_coarse_triangles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges,
+                                          double edge_length);
+// Triangles per quad of a component's isotropic remesh: kWorkingFacesPerQuad on needles across
+// features, kCoarseRemeshFacesPerQuad otherwise.
+double remesh_faces_per_quad(const TriMesh& mesh, const std::vector<char>& feature_edges);
 
 // mesh: one connected, oriented, manifold component (connectivity built); feature_edges: #E.
 // With remesh_faces > 0 (pipeline/policy.h decides when: has_needles_across_features), the component

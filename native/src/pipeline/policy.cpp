@@ -293,15 +293,21 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
 
 namespace {
 
-// A remesh part on its own triangles (no working mesh) with feature edges across needles.
+// A remesh part on its own triangles (no working mesh).
+bool remesh_on_own_triangles(const ComponentState& state, Job job) { return job == Job::Remesh && !state.full_mesh; }
+
+// Such a part with feature edges across needles.
 bool on_needles_across_features(const ComponentState& state, Job job) {
-  return job == Job::Remesh && !state.full_mesh && has_needles_across_features(state.mesh, state.feature_edges);
+  return remesh_on_own_triangles(state, job) && has_needles_across_features(state.mesh, state.feature_edges);
 }
 
 }  // namespace
 
-bool remesh_may_bring_quads_closer(const ComponentState& state, Job job) {
-  return !state.failure && state.quads.has_value() && on_needles_across_features(state, job);
+bool remesh_may_bring_quads_closer(const ComponentState& state, Job job, double edge_length) {
+  if (state.failure || !state.quads.has_value()) return false;
+  return on_needles_across_features(state, job) ||
+         (remesh_on_own_triangles(state, job) &&
+          has_coarse_triangles_across_features(state.mesh, state.feature_edges, edge_length));
 }
 
 bool retry_on_isotropic_remesh(const ComponentState& state, Job job) {

@@ -106,13 +106,16 @@ void bound_repair_where_pairs_were_cancelled(const ComponentState& state, Seamle
 // 8 004 quads with 3 876 irregular vertices).
 bool retry_without_cancelled_pairs(const ComponentState& state);
 // A remesh part quadded on its own needle triangles (as below: features, needles over
-// kRemeshAboveNeedleShare) whose quads lie farther than this many target quad edges from its
-// surface, either way, is also run again on an isotropic remesh, and takes those quads when they
-// lie closer: a map on needles can be regular and still cut across the part (a CAD-style cylinder
-// of needle fans at 2 000 quads: 8.6 % of the diagonal, 3 quad edges, on its own triangles; 0.12 %
-// on a remesh).
-constexpr double kMaxQuadDistanceInEdges = 1;
-bool remesh_may_bring_quads_closer(const ComponentState& state, Job job);
+// kRemeshAboveNeedleShare) or coarse ones (features, triangles over kCoarseEdgeInQuads quad edges
+// long over that share: intake/working_mesh.h) whose quads lie farther than this many target quad
+// edges from its surface, either way, is also run again on an isotropic remesh, and takes those
+// quads when they lie closer: a map on needles can be regular and still cut across the part (a
+// CAD-style cylinder of needle fans at 2 000 quads: 8.6 % of the diagonal, 3 quad edges, on its
+// own triangles; 0.12 % on a remesh); on a few coarse triangles it lays a curved rim on one
+// straight isoline (block with edges over 40 degrees: 0.86 quad edges off at 8 000 quads, 1.21 % of
+// the diagonal; 0.10 % on a remesh).
+constexpr double kMaxQuadDistanceInEdges = 0.5;
+bool remesh_may_bring_quads_closer(const ComponentState& state, Job job, double edge_length);
 // A remesh part that failed on its own triangles, which has feature edges and needles over
 // kRemeshAboveNeedleShare of its area (intake/working_mesh.h), is first run again on an isotropic
 // remesh of itself, before every other rescue. Not before it fails: parts whose map holds on their

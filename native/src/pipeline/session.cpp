@@ -250,7 +250,9 @@ ComponentState Session::prepare_component(int c, const std::vector<char>& featur
   if (job == Job::Remesh) {
     const double edge_length = target_edge_length(), area = component_area(c);
     state.working_face_budget = component_face_budget(c, edge_length);
-    const int remesh_faces = remesh ? remesh_face_budget(area / (edge_length * edge_length), area / intake_area()) : 0;
+    const int remesh_faces = remesh ? remesh_face_budget(area / (edge_length * edge_length), area / intake_area(),
+                                                         remesh_faces_per_quad(state.mesh, state.feature_edges))
+                                    : 0;
     WorkingMesh working =
         make_working_mesh(state.mesh, state.feature_edges, state.working_face_budget, remesh_faces, progress);
     if (working.replaces_input()) {
@@ -453,13 +455,13 @@ void Session::remesh_parts_off_their_surface(Job job, Progress& progress) {
   const std::vector<double> targets = rescue_quad_targets();
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
-    if (!remesh_may_bring_quads_closer(state, job)) continue;
+    if (!remesh_may_bring_quads_closer(state, job, target_edge_length())) continue;
     const double distance = quads_distance(state.quads->extraction.quads, state.mesh, progress);
     if (distance <= limit) continue;
     ComponentState own = state;
     state.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
                                 "its quads lie up to " + std::to_string(distance) +
-                                    " off its surface (more than a quad edge) on its needle triangles"};
+                                    " off its surface (more than half a quad edge) on its own triangles"};
     if (!quad_on_isotropic_remesh(state, static_cast<int>(c), targets[c], job, progress) ||
         quads_distance(state.quads->extraction.quads, *state.full_mesh, progress) >= distance)
       state = std::move(own);
