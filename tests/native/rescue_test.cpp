@@ -205,6 +205,32 @@ TEST(RescueMeshes, AFinerDensityStillFlippedGivesWayToSplitTriangles) {
   EXPECT_GE(chained, 1) << "part 30 went through both rungs (measured 2026-12-05)";
 }
 
+// cycloidal with sharp edges at 40 degrees, 500 quads: three small parts (1 510 triangles each) keep
+// 9 of their 24 quads flipped at half the quad edge and none of 80 at a quarter (measured
+// 2026-12-07). The finer densities go on while quads stay flipped and the one with fewest is kept:
+// a part rescued there at half the edge has none flipped, and the three take the quarter's.
+TEST(RescueMeshes, FinerDensitiesGoOnWhileQuadsStayFlipped) {
+  Session session(read_mesh_file(test::mesh_path("cycloidal.ply")));
+  RemeshOptions options;
+  options.target_faces = 500;
+  options.sharp_angle_deg = 40;
+  session.set_options(options);
+  Progress progress;
+  session.run(Job::Remesh, progress);
+  const Json& report = session.report();
+  expect_every_part_quadded("cycloidal@500@40", session);
+  int at_a_quarter = 0;
+  for (const Json& r : report["rescued_components"]) {
+    const std::string why = r["message"];
+    if (r["rescue"] != "finer density" || why.find("stayed flipped") == std::string::npos) continue;
+    const ComponentState& state = session.components()[r["component"].get<int>()];
+    if (r["edge_length_factor"] == 0.5) EXPECT_EQ(state.quad_choice().untangle.flipped_after, 0) << r;
+    if (r["edge_length_factor"] == 0.25) ++at_a_quarter;
+  }
+  EXPECT_GE(at_a_quarter, 3);
+  EXPECT_LE(report["quad"]["flipped_quads"].get<int>(), 2);  // 29 before (2 measured)
+}
+
 // A torus whose tube is 1/20 of its ring, at 10 quads: the layout's quads around the tube do not
 // form a mesh (a double edge), so the only part is rescued at a finer density, and a density asked
 // again gives the same quads.

@@ -43,7 +43,8 @@
 //                                           or handle narrower than a quad) and the part alone at 1/2,
 //                                           else 1/4 of the quad edge length gives no more quads
 //   flipped part   kFinerFlipShare          a minor part whose quads stay flipped against the
-//                                           surface: alone at a finer density, when fewer stay so
+//                                           surface: alone at the finer density where fewest stay
+//                                           so, when fewer than its own
 //                  kFlipRescueShare         a small part whose quads stay flipped against the
 //                                           surface (also after the finer density): its split
 //                                           triangles, when they have none
@@ -277,9 +278,10 @@ constexpr double kFinerEdgeFactors[] = {0.5, 0.25};
 bool finer_density_may_help(const std::string& failed_stage);
 
 // A part whose chosen quads stay flipped against the surface and that makes at most this share of
-// all quads is quadded alone at the finer densities of kFinerEdgeFactors in turn, and takes the
-// first one's quads that leave fewer flipped (ogre's part 42 at 2 000 quads, genus 1: 8 of its 316
-// stay flipped)...
+// all quads is quadded alone at the finer densities of kFinerEdgeFactors in turn, until one leaves
+// none flipped, and takes the quads of the one that leaves fewest, if fewer than its own (ogre's
+// part 42 at 2 000 quads, genus 1: 8 of its 316 stay flipped; three small parts of cycloidal at 500
+// quads with edges over 40 degrees: 9 of 24 at half the edge length, none of 80 at a quarter)...
 constexpr double kFinerFlipShare = 0.25;
 // A part whose chosen quads stay flipped against the surface (it folds within a quad: thin sheets,
 // small parts), also those of the finer density above (truck's part 30 at 2 000 quads: 7 flipped,

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include "core/blas_kernels.h"
@@ -407,20 +408,25 @@ bool Session::quad_at_finer_density(ComponentState& state, double target_quads, 
 
 bool Session::unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
   const int flipped = state.quads->untangle.flipped_after;
+  std::optional<ComponentState> best;
+  int fewest = flipped;
   for (const double factor : kFinerEdgeFactors) {
     ComponentState finer = state;
     if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
     const int left = finer.quads->untangle.flipped_after;
-    if (left >= flipped) continue;
+    if (left >= fewest) continue;
+    fewest = left;
     finer.finer_edge_factor = factor;
-    finer.failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
-                                std::to_string(flipped) +
-                                    " quad(s) stayed flipped against the surface at the density "
-                                    "asked (it folds within them)"};
-    state = std::move(finer);
-    return true;
+    best = std::move(finer);
+    if (left == 0) break;
   }
-  return false;
+  if (!best) return false;
+  best->failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                              std::to_string(flipped) +
+                                  " quad(s) stayed flipped against the surface at the density "
+                                  "asked (it folds within them)"};
+  state = std::move(*best);
+  return true;
 }
 
 void Session::rescue_failed_components(Job job, Progress& progress) {

@@ -132,7 +132,8 @@ class Session {
   // The component's quads alone at `factor` of the quad edge length asked; false if a stage failed.
   bool quad_at_edge_factor(ComponentState& state, double factor, double target_quads, Job job, Progress& progress);
   // A remesh component whose quads stay flipped, at the finer densities of kFinerEdgeFactors in
-  // turn: it takes the first one's quads that have fewer flipped (state unchanged otherwise).
+  // turn until one has none flipped: it takes the quads of the one with fewest flipped, if fewer
+  // than its own (state unchanged otherwise).
   bool unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress);
   void collect_grid_uvs();
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
