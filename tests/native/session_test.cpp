@@ -713,7 +713,7 @@ TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
 // around one inner vertex): on them the map lays most of the disc's sharp rim on one straight
 // isoline and the quads cut across the rim (2.33 % and 1.21 % of the diagonal, 0.8-0.9 quad edges).
 // The part is quadded again on an isotropic remesh (policy.h: kMaxQuadDistanceInEdges), whose quads
-// lie within 0.3 % (0.25 % and 0.11 % measured) with the same 48 irregular vertices; a new density
+// lie within 0.5 % (0.25 % and 0.11 % measured) with the same 48 irregular vertices; a new density
 // in the same session keeps that remesh. At 500 quads its triangles are not over two quad edges
 // long and it keeps them (5.4 % off: docs/limitations.md).
 TEST(SessionMeshes, QuadsFarOffACoarseCadPartComeFromARemesh) {
@@ -729,10 +729,10 @@ TEST(SessionMeshes, QuadsFarOffACoarseCadPartComeFromARemesh) {
     ASSERT_TRUE(report.contains("rescued_components")) << target;
     EXPECT_EQ(report["rescued_components"][0]["rescue"], "isotropic working mesh");
     EXPECT_EQ(report["working_mesh"]["remeshed_components"], 1) << target;
-    EXPECT_LE(expect_valid_output("block.obj", session, 40, 0).quad.hausdorff, 0.003) << target;
+    EXPECT_LE(expect_valid_output("block.obj", session, 40, 0).quad.hausdorff, 0.005) << target;
     run_completed(redo, Job::Remesh, target, 40);  // 2 000, then 8 000 in the same session
     EXPECT_EQ(redo.report()["working_mesh"]["remeshed_components"], 1) << target;
-    EXPECT_LE(expect_valid_output("block.obj", redo, 40, 0).quad.hausdorff, 0.003) << target;
+    EXPECT_LE(expect_valid_output("block.obj", redo, 40, 0).quad.hausdorff, 0.005) << target;
   }
 }
 
