@@ -184,17 +184,39 @@ TEST(WorkingMeshGenerated, DecimatedTowardOneFaceStaysAProperManifold) {
   }
 }
 
+// A part with a feature edge whose triangles are over kCoarseEdgeInQuads quad edges long on more
+// than kRemeshAboveNeedleShare of its area is coarse (block's top disc at 2 000 and 8 000 quads),
+// and is remeshed at kCoarseRemeshFacesPerQuad; without features, or at a coarser density, not.
+TEST(WorkingMeshBudget, CoarseTrianglesAcrossFeatures) {
+  TriMesh square;
+  square.V.resize(4, 3);
+  square.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
+  square.F.resize(2, 3);
+  square.F << 0, 1, 2, 0, 2, 3;
+  build_connectivity(square);
+  std::vector<char> features(square.num_edges(), 0);
+  EXPECT_FALSE(has_coarse_triangles_across_features(square, features, 0.1));  // no feature
+  features[0] = 1;
+  EXPECT_TRUE(has_coarse_triangles_across_features(square, features, 0.1));  // sides 10 quad edges long
+  EXPECT_TRUE(has_coarse_triangles_across_features(square, features, 0.7));  // diagonal over 2 quad edges
+  EXPECT_FALSE(has_coarse_triangles_across_features(square, features, 0.75));
+  EXPECT_EQ(remesh_faces_per_quad(square, features), kCoarseRemeshFacesPerQuad);  // no needles
+}
+
 TEST(WorkingMeshBudget, FivePerQuadAboveTheFloor) {
   EXPECT_EQ(working_face_budget(8000), 40000);
   EXPECT_EQ(working_face_budget(100), kMinWorkingFaces);
   EXPECT_EQ(working_face_budget(0), kMinWorkingFaces);
   EXPECT_EQ(working_face_budget(1e6), kWorkingFacesPerQuad * 1000000);
   EXPECT_EQ(working_face_budget(1e12), 1000000000);
-  // A remeshed part: five per quad, above its share of the floor.
-  EXPECT_EQ(remesh_face_budget(8000, 1), 40000);
-  EXPECT_EQ(remesh_face_budget(100, 1), kMinWorkingFaces);
-  EXPECT_EQ(remesh_face_budget(100, 0.01), 500);
-  EXPECT_EQ(remesh_face_budget(10, 0.001), 50);
+  // A remeshed part: its triangles per quad (five on needles, two on coarse triangles), above its
+  // share of the floor.
+  EXPECT_EQ(remesh_face_budget(8000, 1, kWorkingFacesPerQuad), 40000);
+  EXPECT_EQ(remesh_face_budget(8000, 1, kCoarseRemeshFacesPerQuad), kMinWorkingFaces);
+  EXPECT_EQ(remesh_face_budget(30000, 1, kCoarseRemeshFacesPerQuad), 60000);
+  EXPECT_EQ(remesh_face_budget(100, 1, kWorkingFacesPerQuad), kMinWorkingFaces);
+  EXPECT_EQ(remesh_face_budget(100, 0.01, kWorkingFacesPerQuad), 500);
+  EXPECT_EQ(remesh_face_budget(10, 0.001, kWorkingFacesPerQuad), 50);
 }
 
 }  // namespace
