@@ -181,7 +181,9 @@ bool TriangleBvh::face_opposite_ways(int i, int j) const {
 }
 
 TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& normal_wanted, double tolerance) const {
-  const auto [closest, first] = closest_leaf(p);
+  const std::pair<Hit, int> found = closest_leaf(p);
+  const Hit& closest = found.first;
+  const int first = found.second;  // a plain local: the lambda below captures it (C++17)
   if (first < 0) return closest;
   if (normal(first).dot(normal_wanted) > 0) return closest;
   const double reach = std::sqrt(closest.squared_distance) + tolerance;
