@@ -418,29 +418,36 @@ std::optional<RemeshedSurface> remesh_isotropic(const TriMesh& mesh, const std::
   return remesher.result();
 }
 
-double needle_area_share(const TriMesh& mesh) {
-  double needles = 0, total = 0;
-  const double min_angle = kNeedleAngleDeg * M_PI / 180;
+namespace {
+
+// Share of the mesh's area in the faces f for which selected(f) holds (0 for a mesh without area).
+template <class Selected>
+double area_share_of(const TriMesh& mesh, Selected&& selected) {
+  double chosen = 0, total = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const double area = 0.5 * mesh.face_normal_unnormalized(f).norm();
     total += area;
-    const double smallest =
-        std::min({corner_angle(mesh, 3 * f), corner_angle(mesh, 3 * f + 1), corner_angle(mesh, 3 * f + 2)});
-    if (smallest < min_angle) needles += area;
+    if (selected(f)) chosen += area;
   }
-  return total > 0 ? needles / total : 0.0;
+  return total > 0 ? chosen / total : 0.0;
+}
+
+}  // namespace
+
+double needle_area_share(const TriMesh& mesh) {
+  const double min_angle = kNeedleAngleDeg * M_PI / 180;
+  return area_share_of(mesh, [&](int f) {
+    return std::min({corner_angle(mesh, 3 * f), corner_angle(mesh, 3 * f + 1), corner_angle(mesh, 3 * f + 2)}) <
+           min_angle;
+  });
 }
 
 double coarse_area_share(const TriMesh& mesh, double edge_length) {
-  double coarse = 0, total = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const double area = 0.5 * mesh.face_normal_unnormalized(f).norm();
-    total += area;
+  return area_share_of(mesh, [&](int f) {
     double longest = 0;
     for (int k = 0; k < 3; ++k) longest = std::max(longest, mesh.edge_vector(3 * f + k).norm());
-    if (longest > edge_length) coarse += area;
-  }
-  return total > 0 ? coarse / total : 0.0;
+    return longest > edge_length;
+  });
 }
 
 }  // namespace qgp

@@ -38,6 +38,10 @@ std::optional<WorkingMesh> remeshed_working_mesh(const TriMesh& mesh, const std:
   return result;
 }
 
+bool has_feature_edges(const std::vector<char>& feature_edges) {
+  return std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end();
+}
+
 }  // namespace
 
 int working_face_budget(double target_quads) {
@@ -46,13 +50,12 @@ int working_face_budget(double target_quads) {
 }
 
 bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges) {
-  return std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end() &&
-         needle_area_share(mesh) > kRemeshAboveNeedleShare;
+  return has_feature_edges(feature_edges) && needle_area_share(mesh) > kRemeshAboveNeedleShare;
 }
 
 bool has_coarse_triangles_across_features(const TriMesh& mesh, const std::vector<char>& feature_edges,
                                           double edge_length) {
-  return std::find(feature_edges.begin(), feature_edges.end(), 1) != feature_edges.end() &&
+  return has_feature_edges(feature_edges) &&
          coarse_area_share(mesh, kCoarseEdgeInQuads * edge_length) > kRemeshAboveNeedleShare;
 }
 
