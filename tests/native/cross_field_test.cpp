@@ -425,6 +425,40 @@ TEST(CrossField, CloseSingularityPairsAreCancelled) {
   EXPECT_GT(cancelled, 30);
 }
 
+// Where a seamless map with the close pairs cancelled folded, the pipeline asks for the field again
+// with the pairs near the folds kept (keep_pairs_near): given the +1 ends of every other pair the
+// field cancelled, none of those singularities is cancelled now, no singularity is made or moved,
+// the pairs kept are counted, and the other pairs are still cancelled.
+TEST(CrossField, PairsNearGivenVerticesAreKept) {
+  std::vector<std::pair<std::string, TriMesh>> cases;
+  for (const char* file : {"cow.obj", "stanford-bunny.obj", "dragon-genus1.obj"})
+    cases.emplace_back(file, test::component_mesh(test::load_mesh(file), 0));
+  for (const auto& [name, mesh] : cases) {
+    double area = 0;
+    for (int f = 0; f < mesh.num_faces(); ++f) area += 0.5 * mesh.face_normal_unnormalized(f).norm();
+    Progress progress;
+    const CrossField plain = compute_cross_field(mesh, CrossFieldOptions{}, progress);
+    CrossFieldOptions options;
+    options.cancel_pairs_within = std::sqrt(area / 2000);
+    const CrossField cancelled = compute_cross_field(mesh, options, progress);
+    EXPECT_EQ(cancelled.num_pairs_kept_near_folds, 0) << name;
+    std::vector<int> gone;  // +1 vertices whose pair was cancelled
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (plain.vertex_index[v] == 1 && cancelled.vertex_index[v] == 0) gone.push_back(v);
+    ASSERT_GE(gone.size(), 2u) << name;
+    for (size_t i = 0; i < gone.size(); i += 2) options.keep_pairs_near.push_back(gone[i]);
+    const CrossField kept = compute_cross_field(mesh, options, progress);
+    check_field(mesh, kept, -1);
+    EXPECT_GE(kept.num_pairs_kept_near_folds, static_cast<int>(options.keep_pairs_near.size())) << name;
+    EXPECT_GT(kept.num_close_pairs, 0) << name;
+    EXPECT_LT(kept.num_close_pairs, cancelled.num_close_pairs) << name;
+    EXPECT_EQ(kept.num_singularities, plain.num_singularities - 2 * kept.num_close_pairs) << name;
+    for (int v : options.keep_pairs_near) EXPECT_EQ(kept.vertex_index[v], 1) << name << " vertex " << v;
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (kept.vertex_index[v] != 0) EXPECT_EQ(kept.vertex_index[v], plain.vertex_index[v]) << name << " vertex " << v;
+  }
+}
+
 // Quarter turns (mod 4) of the matchings around a closed loop of faces, each next to the one before.
 int dual_loop_turns(const TriMesh& mesh, const CrossField& field, const std::vector<int>& faces) {
   int turns = 0;

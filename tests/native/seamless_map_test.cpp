@@ -346,10 +346,13 @@ TEST(SeamlessMap, WindingDefectsCountOneRingsAFullTurnOffTheirCone) {
   EXPECT_EQ(problem.winding_defects(c.param), 0);
   // Claim a cube corner were a valence-7 cone, and a flat vertex a valence-8 one: both are a full
   // turn off what the map winds.
-  for (int v = 0, changed = 0; v < cube.mesh.num_vertices() && changed < 2; ++v)
-    if ((changed == 0 && cone[v] == 3) || (changed == 1 && cone[v] == 4)) cone[v] += 4, ++changed;
+  std::vector<int> claimed;
+  for (int v = 0; v < cube.mesh.num_vertices() && claimed.size() < 2; ++v)
+    if ((claimed.empty() && cone[v] == 3) || (claimed.size() == 1 && cone[v] == 4)) cone[v] += 4, claimed.push_back(v);
   problem.set_cone_angles(cone);
   EXPECT_EQ(problem.winding_defects(c.param), 2);
+  EXPECT_EQ(problem.wound_vertices(c.param), claimed);
+  EXPECT_TRUE(c.bad_vertices.empty());
   EXPECT_THROW(problem.set_cone_angles(std::vector<int>(3, 4)), Error);
 }
 
@@ -864,6 +867,18 @@ TEST(SeamlessMapMeshes, SharedCoordinatesMoveWhereLocalRegionsCannot) {
     const SeamlessMapStats& s0 = stuck.stats;
     EXPECT_GT(s0.flipped_triangles + s0.degenerate_triangles + s0.winding_defects, 0);
     EXPECT_FALSE(s0.moved_shared_coordinates);
+    // Its bad vertices: every corner of its non-positive triangles, and no vertex off them but
+    // (at most) its wound ones.
+    const std::vector<double> area = parametric_areas(stuck.param);
+    std::set<int> corners;
+    for (int f = 0; f < p.mesh.num_faces(); ++f)
+      if (!(area[f] > 0))
+        for (int k = 0; k < 3; ++k) corners.insert(p.mesh.F(f, k));
+    const std::set<int> bad(stuck.bad_vertices.begin(), stuck.bad_vertices.end());
+    EXPECT_EQ(bad.size(), stuck.bad_vertices.size());
+    EXPECT_TRUE(std::includes(bad.begin(), bad.end(), corners.begin(), corners.end()));
+    EXPECT_LE(bad.size(), corners.size() + s0.winding_defects);
+    EXPECT_FALSE(bad.empty());
 
     SeamlessMapOptions shared = local;
     shared.move_shared_coordinates = true;
@@ -873,6 +888,7 @@ TEST(SeamlessMapMeshes, SharedCoordinatesMoveWhereLocalRegionsCannot) {
     EXPECT_TRUE(m.stats.moved_shared_coordinates);
     EXPECT_EQ(m.stats.field_frame_solves, 0);
     expect_regular_with_features_on_isolines(p, m);
+    EXPECT_TRUE(m.bad_vertices.empty());
   }
 }
 

@@ -699,8 +699,8 @@ CrossField compute_cross_field(const TriMesh& mesh, const CrossFieldOptions& opt
     field.num_collapsed_sectors = field.index_sum = field.num_singularities = 0;
     compute_vertex_indices(mesh, eps, rho, field);
   };
-  field.num_close_pairs =
-      cross_field_detail::cancel_close_pairs(mesh, fr.area, options.cancel_pairs_within, theta, eps, field);
+  field.num_close_pairs = cross_field_detail::cancel_close_pairs(mesh, fr.area, options.cancel_pairs_within,
+                                                                 options.keep_pairs_near, theta, eps, field);
   if (field.num_close_pairs > 0) remeasure();
   if (cross_field_detail::make_torus_field_admissible(mesh, fr.area, theta, eps, field)) remeasure();
   progress.update(1.0);

@@ -7,9 +7,9 @@
 // constraints) and the rest solves one sparse Hermitian system (CHOLMOD); without any constraint
 // the field is the smallest eigenvector (inverse iteration, mass = face areas).
 // The transport is the Levi-Civita connection of a proxy surface whose face normals are the true
-// ones diffused over 10 rings of neighbours (never across feature or boundary edges): scan noise
-// then does not spawn singularity pairs. Directions move between the true and the proxy tangent
-// planes by the minimal rotation between the normals. Everything downstream (matchings, indices,
+// ones diffused over 1 % of the bounding-box diagonal (never across feature or boundary edges):
+// scan noise then does not spawn singularity pairs. Directions move between the true and the proxy
+// tangent planes by the minimal rotation between the normals. Everything downstream (matchings, indices,
 // sectors) is measured on the true faces.
 //
 // Constrained faces ("feature" below means caller feature, dihedral feature or boundary edge):
@@ -39,12 +39,14 @@
 namespace qgp {
 
 struct CrossFieldOptions {
-  std::vector<char> feature_edges;  // #E: caller's feature edges (Blender marked sharp); may be empty
-  double sharp_angle_deg = -1;      // edges with a larger dihedral angle (angle between the two
-                                    // face normals) are features; < 0: off
-  double cancel_pairs_within = 0;   // pairs of singularities of index +1 and -1 off features joined
-                                    // by ordinary edges no longer than this (model units) are
-                                    // cancelled (0: none)
+  std::vector<char> feature_edges;   // #E: caller's feature edges (Blender marked sharp); may be empty
+  double sharp_angle_deg = -1;       // edges with a larger dihedral angle (angle between the two
+                                     // face normals) are features; < 0: off
+  double cancel_pairs_within = 0;    // pairs of singularities of index +1 and -1 off features joined
+                                     // by ordinary edges no longer than this (model units) are
+                                     // cancelled (0: none)
+  std::vector<int> keep_pairs_near;  // vertices near which no such pair is cancelled (where a
+                                     // seamless map with them folded)
 };
 
 struct CrossField {
@@ -97,6 +99,7 @@ struct CrossField {
                                        // edge_sector (|rho| < 90deg) per move (see
                                        // resolve_collapsed_sectors in cross_field.cpp)
   int num_close_pairs = 0;             // pairs cancelled by cancel_pairs_within
+  int num_pairs_kept_near_folds = 0;   // pairs within it left uncancelled near keep_pairs_near
   int num_cancelled_pairs = 0;         // a closed torus's fields that no seamless map follows
   int num_untwisted_loops = 0;         // without folds, made admissible (see
                                        // compute_cross_field): its one pair of singularities of

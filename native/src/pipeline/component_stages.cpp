@@ -43,13 +43,32 @@ void throw_if_repair_declined(const ComponentState& state) {
 
 }  // namespace
 
-void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress) {
-  if (state.field.has_value() && field_serves(state.field.key(), edge_length, cancel_pairs)) return;
+namespace {
+
+CrossFieldOptions cross_field_options(const ComponentState& state, double edge_length, bool cancel_pairs) {
   CrossFieldOptions options;
   options.feature_edges = state.feature_edges;
   options.sharp_angle_deg = -1;  // dihedral features are already in feature_edges
   options.cancel_pairs_within = cancel_pairs ? kCancelPairsWithin * edge_length : 0;
+  return options;
+}
+
+}  // namespace
+
+void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress) {
+  if (state.field.has_value() && field_serves(state.field.key(), edge_length, cancel_pairs)) return;
+  const CrossFieldOptions options = cross_field_options(state, edge_length, cancel_pairs);
   state.field.store({edge_length, cancel_pairs}, compute_cross_field(state.mesh, options, progress));
+}
+
+bool keep_pairs_near_folds(ComponentState& state, Progress& progress) {
+  const FieldKey key = state.field.key();
+  CrossFieldOptions options = cross_field_options(state, key.edge_length, key.cancel_pairs);
+  options.keep_pairs_near = state.seamless->bad_vertices;
+  CrossField field = compute_cross_field(state.mesh, options, progress);
+  if (field.num_pairs_kept_near_folds == 0) return false;
+  state.field.store(key, std::move(field));
+  return true;
 }
 
 void update_cut_graph(ComponentState& state, Progress& progress) {

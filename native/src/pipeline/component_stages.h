@@ -12,6 +12,9 @@ namespace qgp {
 // cancel_pairs: the field with its close singularity pairs cancelled (policy.h kCancelPairsWithin);
 // a stored field without them serves either (see field_serves).
 void update_cross_field(ComponentState& state, double edge_length, bool cancel_pairs, Progress& progress);
+// The field again with the close pairs near the stored seamless map's bad vertices left uncancelled
+// (where the map with them folded). False, and the field kept, when no cancelled pair is near them.
+bool keep_pairs_near_folds(ComponentState& state, Progress& progress);
 void update_cut_graph(ComponentState& state, Progress& progress);
 // Stage 1c: the seamless map for quads of `edge_length` times face_size (the sizing field, #F, or
 // empty; a map solved for a nearby length and the same sizes is rescaled instead, see

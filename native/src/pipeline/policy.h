@@ -25,8 +25,10 @@
 //                                           valid mesh; else (or when fewer stay flipped) the
 //                                           T-mesh layout's quads; else a refusal naming why
 //   cross field    field_serves             the field with close +1/-1 pairs cancelled (its seamless
-//                                           map's repair cut short); the field without, where the
-//                                           seamless map then folds
+//                                           map's repair cut short); where that map folds, the field
+//                                           with the pairs near its folds kept (when any is,
+//                                           keep_pairs_near_folds); the field without, where the
+//                                           seamless map still folds
 //   failed part    retry_on_isotropic_remesh   a remesh part with feature edges across needle
 //                                           triangles (a CAD tessellation) that failed on its own
 //                                           triangles (or whose seamless map started folded there,
@@ -88,9 +90,12 @@ constexpr double kCancelPairsWithin = 1.0;
 // the field without cancelled pairs, the fallback below, serves a request with or without them.
 bool field_serves(const FieldKey& stored, double edge_length, bool cancel_pairs);
 // A field whose cancelled pairs leave its seamless map folded (flipped or degenerate triangles,
-// wound one-rings: the curvature they held has nowhere to go) gives way to the field without
-// cancelled pairs (dragon-genus1 at 500 quads: 1 flipped triangle after 24 repair rounds with
-// 125 pairs cancelled; none without).
+// wound one-rings: the curvature they held has nowhere to go) gives way first to the field with the
+// pairs near the folds kept (component_stages.h: keep_pairs_near_folds; dragon-genus1 at 500 quads:
+// 1 flipped triangle and 1 wound one-ring after 14 short repair rounds with 125 pairs cancelled;
+// regular with 115 cancelled and 11 kept, 251 singular points instead of 481), then, where its map
+// still folds or no pair is near the folds, to the field without cancelled pairs (ogre and
+// dragon-genus1 at 8 000 quads: a fold more than 8 rings from every cancelled pair).
 bool seamless_map_folds_where_pairs_were_cancelled(const ComponentState& state);
 // That first map, with pairs cancelled, gets a short repair: it stops after this many rounds
 // without fewer bad triangles and skips the escalations (the rounds that move shared coordinates,

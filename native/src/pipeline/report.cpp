@@ -85,6 +85,7 @@ Json field_report(const std::vector<ComponentState>& components) {
                              {"collapsed_sectors", field.num_collapsed_sectors},
                              {"close_pairs", field.num_close_pairs},
                              {"close_pairs_kept", !state.field.key().cancel_pairs},
+                             {"pairs_kept_near_folds", field.num_pairs_kept_near_folds},
                              {"cancelled_pairs", field.num_cancelled_pairs},
                              {"untwisted_loops", field.num_untwisted_loops},
                              {"cut_edges", state.cut->num_cut_edges}});

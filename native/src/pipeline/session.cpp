@@ -571,6 +571,10 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
   for_each_component(job, "seamless_map", progress, [&](ComponentState& s) {
     const bool remesh_follows = remesh_follows_a_folded_start(s, job, rescues_failed_components(job));
     update_seamless_map(s, edge_length, component_face_sizes(s), progress, remesh_follows);
+    if (seamless_map_folds_where_pairs_were_cancelled(s) && keep_pairs_near_folds(s, progress)) {
+      update_cut_graph(s, progress);
+      update_seamless_map(s, edge_length, component_face_sizes(s), progress, remesh_follows);
+    }
     if (!seamless_map_folds_where_pairs_were_cancelled(s)) return;
     update_cross_field(s, edge_length, false, progress);
     update_cut_graph(s, progress);

@@ -246,8 +246,15 @@ std::vector<int> ParametrizationProblem::winding_charges(const std::function<Vec
 }
 
 int ParametrizationProblem::winding_defects(const Parametrization& param) const {
+  return static_cast<int>(wound_vertices(param).size());
+}
+
+std::vector<int> ParametrizationProblem::wound_vertices(const Parametrization& param) const {
   const std::vector<int> charge = winding_charges([&](int c) { return param.corner(c / 3, c % 3); });
-  return static_cast<int>(std::count_if(charge.begin(), charge.end(), [](int q) { return q != 0; }));
+  std::vector<int> wound;
+  for (int v = 0; v < static_cast<int>(charge.size()); ++v)
+    if (charge[v] != 0) wound.push_back(v);
+  return wound;
 }
 
 void ParametrizationProblem::set_pin_translation(bool pin) {

@@ -155,6 +155,8 @@ class ParametrizationProblem {
   // Vertices whose one-ring winds at least a full turn off their cone angle in `param` (a flip-free
   // map can do that: a valence-5 cone wound by 90 degrees). 0 without set_cone_angles.
   int winding_defects(const Parametrization& param) const;
+  // Those vertices (ascending).
+  std::vector<int> wound_vertices(const Parametrization& param) const;
 
   ParametrizationSolution solve(const ParametrizationSolveOptions& options, Progress& progress);
 

@@ -69,6 +69,26 @@ IsolineSelection select_isolines(const TriMesh& mesh, const CrossField& field, c
   return out;
 }
 
+namespace {
+
+// The corners of param's flipped and degenerate triangles and the vertices wound off their cone
+// (ascending, each once).
+std::vector<int> bad_vertices(const TriMesh& mesh, const Parametrization& param,
+                              const ParametrizationProblem& problem) {
+  std::vector<char> bad(mesh.num_vertices(), 0);
+  const std::vector<double> area = parametric_areas(param);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (!(area[f] > 0))
+      for (int k = 0; k < 3; ++k) bad[mesh.F(f, k)] = 1;
+  for (int v : problem.wound_vertices(param)) bad[v] = 1;
+  std::vector<int> vertices;
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    if (bad[v]) vertices.push_back(v);
+  return vertices;
+}
+
+}  // namespace
+
 SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, const CutGraph& cut,
                                  const SeamlessMapOptions& options, Progress& progress) {
   progress.check_cancel();
@@ -133,6 +153,7 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   SeamlessMap out;
   out.param = std::move(solution.param);
   out.face_size = options.face_size;
+  out.bad_vertices = bad_vertices(mesh, out.param, *problem);
   const ParametrizationSolveStats& s = solution.stats;
   SeamlessMapStats& st = out.stats;
   st.flipped_triangles = s.flipped;

@@ -23,6 +23,9 @@ constexpr int kPairSmoothingRings = 4;
 // 20 000-triangle working mesh at 500 quads: pairs up to 5 edges apart cancelled, 481 -> 175
 // singularities, and the map kept 2-3 flipped triangles after 13-17 repair rounds).
 constexpr int kMaxPairEdges = 2;
+// Pairs whose path comes within this many rings of where a seamless map with them folded are kept
+// (keep_near): twice the smoothing's reach, where the cancelled quarter turn bends the field.
+constexpr int kKeepPairsRings = 2 * kPairSmoothingRings;
 
 // True for a closed surface of genus 1 (a torus: no boundary, Euler characteristic 0).
 bool is_closed_torus(const TriMesh& mesh, const CrossField& field) {
@@ -219,19 +222,26 @@ std::vector<char> vertices_on_features(const TriMesh& mesh, const std::vector<ch
   return on;
 }
 
-// Per vertex, the number of edges to the nearest vertex of a constrained face (a face next to a
-// feature or boundary edge); INT_MAX when there is none.
-std::vector<int> rings_to_constraints(const TriMesh& mesh, const CrossField& field) {
+// Rings of vertices from the nearest seed (#V; int max where none is reached).
+std::vector<int> rings_from(const TriMesh& mesh, const std::vector<int>& seeds) {
   std::vector<int> rings(mesh.num_vertices(), std::numeric_limits<int>::max()), queue;
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    if (field.constrained_face[f])
-      for (int k = 0; k < 3; ++k)
-        if (rings[mesh.F(f, k)] != 0) rings[mesh.F(f, k)] = 0, queue.push_back(mesh.F(f, k));
+  for (int v : seeds)
+    if (rings[v] != 0) rings[v] = 0, queue.push_back(v);
   for (size_t i = 0; i < queue.size(); ++i)
     for (int h : outgoing_halfedges(mesh, queue[i]))
       if (rings[mesh.to(h)] == std::numeric_limits<int>::max())
         rings[mesh.to(h)] = rings[queue[i]] + 1, queue.push_back(mesh.to(h));
   return rings;
+}
+
+// Per vertex, the number of edges to the nearest vertex of a constrained face (a face next to a
+// feature or boundary edge); INT_MAX when there is none.
+std::vector<int> rings_to_constraints(const TriMesh& mesh, const CrossField& field) {
+  std::vector<int> corners;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (field.constrained_face[f])
+      for (int k = 0; k < 3; ++k) corners.push_back(mesh.F(f, k));
+  return rings_from(mesh, corners);
 }
 
 // A candidate pair: a path of ordinary halfedges from a +1 to a -1 vertex.
@@ -285,13 +295,10 @@ std::vector<char> faces_near(const TriMesh& mesh, const std::vector<int>& halfed
   return near;
 }
 
-}  // namespace
-
-int cancel_close_pairs(const TriMesh& mesh, const std::vector<double>& area, double max_length,
-                       std::vector<double>& theta, std::vector<double>& eps, CrossField& field) {
-  if (!(max_length > 0)) return 0;
-  // Only where the smoothing moves no constrained face: next to features the field cannot turn,
-  // and the quarter turn squeezed between them folds the seamless map (wingnut at 40 degrees).
+// Every candidate pair within max_length, nearest first (then by vertex ids). Only where the
+// smoothing moves no constrained face: next to features the field cannot turn, and the quarter turn
+// squeezed between them folds the seamless map (wingnut at 40 degrees).
+std::vector<PairPath> close_pair_candidates(const TriMesh& mesh, const CrossField& field, double max_length) {
   const std::vector<int> rings = rings_to_constraints(mesh, field);
   const std::vector<char> on_feature = vertices_on_features(mesh, field.feature_edge);
   std::vector<char> eligible(mesh.num_vertices(), 0);
@@ -305,19 +312,53 @@ int cancel_close_pairs(const TriMesh& mesh, const std::vector<double>& area, dou
   };
   std::sort(candidates.begin(), candidates.end(),
             [&](const PairPath& a, const PairPath& b) { return key(a) < key(b); });
+  return candidates;
+}
+
+// The candidates (in their order) that pair vertices not paired before.
+std::vector<const PairPath*> choose_pairs(const TriMesh& mesh, const std::vector<PairPath>& candidates) {
   std::vector<char> paired(mesh.num_vertices(), 0);
-  std::vector<int> moved_halfedges;
-  int cancelled = 0;
+  std::vector<const PairPath*> chosen;
   for (const PairPath& p : candidates) {
     const int plus = mesh.from(p.halfedges.front()), minus = mesh.to(p.halfedges.back());
     if (paired[plus] || paired[minus]) continue;
     paired[plus] = paired[minus] = 1;
-    for (int h : p.halfedges) turn_matching(mesh, h, 1, field, eps), moved_halfedges.push_back(h);
-    ++cancelled;
+    chosen.push_back(&p);
   }
-  if (cancelled == 0) return 0;
+  return chosen;
+}
+
+// Drops the candidates with a vertex within kKeepPairsRings rings of `keep_near`; returns how many
+// of the pairs chosen from all candidates that drops.
+int drop_pairs_near(const TriMesh& mesh, const std::vector<int>& keep_near, std::vector<PairPath>& candidates) {
+  const std::vector<int> rings = rings_from(mesh, keep_near);
+  auto near = [&](const PairPath* p) {
+    return std::any_of(p->halfedges.begin(), p->halfedges.end(), [&](int h) {
+      return rings[mesh.from(h)] <= kKeepPairsRings || rings[mesh.to(h)] <= kKeepPairsRings;
+    });
+  };
+  const std::vector<const PairPath*> chosen = choose_pairs(mesh, candidates);
+  const int kept = static_cast<int>(std::count_if(chosen.begin(), chosen.end(), near));
+  candidates.erase(std::remove_if(candidates.begin(), candidates.end(), [&](const PairPath& p) { return near(&p); }),
+                   candidates.end());
+  return kept;
+}
+
+}  // namespace
+
+int cancel_close_pairs(const TriMesh& mesh, const std::vector<double>& area, double max_length,
+                       const std::vector<int>& keep_near, std::vector<double>& theta, std::vector<double>& eps,
+                       CrossField& field) {
+  if (!(max_length > 0)) return 0;
+  std::vector<PairPath> candidates = close_pair_candidates(mesh, field, max_length);
+  if (!keep_near.empty()) field.num_pairs_kept_near_folds = drop_pairs_near(mesh, keep_near, candidates);
+  std::vector<int> moved_halfedges;
+  const std::vector<const PairPath*> chosen = choose_pairs(mesh, candidates);
+  for (const PairPath* p : chosen)
+    for (int h : p->halfedges) turn_matching(mesh, h, 1, field, eps), moved_halfedges.push_back(h);
+  if (chosen.empty()) return 0;
   smooth_with_fixed_matchings(mesh, area, field, faces_near(mesh, moved_halfedges, kPairSmoothingRings), theta, eps);
-  return cancelled;
+  return static_cast<int>(chosen.size());
 }
 
 bool make_torus_field_admissible(const TriMesh& mesh, const std::vector<double>& area, std::vector<double>& theta,

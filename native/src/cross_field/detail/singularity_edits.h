@@ -23,9 +23,11 @@ namespace qgp::cross_field_detail {
 // many). Candidates nearest first (then by vertex ids), each vertex in one pair at most; each pair
 // is cancelled by one quarter turn moved along its path, and the field smoothed with the new
 // matchings within a few rings of the paths. area: #F face areas. Returns the number of pairs
-// cancelled.
+// cancelled. keep_near: vertices (where a seamless map with these pairs folded) near which no pair
+// is cancelled; field.num_pairs_kept_near_folds counts the pairs that spares.
 int cancel_close_pairs(const TriMesh& mesh, const std::vector<double>& area, double max_length,
-                       std::vector<double>& theta, std::vector<double>& eps, CrossField& field);
+                       const std::vector<int>& keep_near, std::vector<double>& theta, std::vector<double>& eps,
+                       CrossField& field);
 
 // A closed torus's field that no seamless map follows without folds, made one that does (the
 // paper's footnote to §4; Jucovic and Trenkler 1973; Campen, Shen, Zhou and Zorin 2019):
