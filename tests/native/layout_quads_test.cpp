@@ -39,9 +39,10 @@ bool known_flips(const std::string& name) {
 // the pipeline takes those runs' quads from the layout and untangles them on the input surface too);
 // with the working mesh of intake/edge_collapse (2026-11-29) nefertiti and stanford-bunny 1 at 500
 // (490 and 1 023 quads; igea's layout keeps 1 flipped quad before the untangle at 500 and 2 000).
-// Every other run: none.
+// dragon-genus1 at 500 quads with the pairs near its seamless map's folds kept (2026-12-07): 17 of
+// 1 642, so at most 2 % of its quads now. Every other run: none.
 int allowed_flips_after_untangle(const std::string& name, double target, int quads) {
-  if (name == "dragon-genus1.obj") return quads / 100;
+  if (name == "dragon-genus1.obj") return quads / 50;
   if (name == "beetle.off" && target < 1000) return 2;
   if (name == "armadillo.obj" && target < 1000) return 2;
   // 1 since the repair's own interior-point solver (2026-12-05); the remesh takes these quads and, after
@@ -77,18 +78,18 @@ std::vector<double> mean_edge_length(const QuadMesh& quads) {
   return sum;
 }
 
-// The collapse after the untangle, as the session runs it: no quad stays flipped, slivers do not
-// grow in number, the mesh stays a consistently oriented manifold of the part's Euler
+// The collapse after the untangle, as the session runs it: no quad stays flipped (but `left`),
+// slivers do not grow in number, the mesh stays a consistently oriented manifold of the part's Euler
 // characteristic on the surface, and only the collapsed quads (and dissolved doublets) go.
 void expect_folds_collapsed(const QuadMesh& untangled, int flipped, const ComponentState& state,
-                            const std::string& where) {
+                            const std::string& where, int left) {
   Progress progress;
   QuadMesh collapsed = untangled;
   const UntangleStats stats = collapse_folded_quads(collapsed, state.mesh, state.field->feature_edge, progress);
   const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(collapsed), state.mesh, -1, progress);
   EXPECT_EQ(stats.flipped_before, flipped) << where;
   EXPECT_EQ(stats.flipped_after, m.quad.flipped_quads()) << where;
-  EXPECT_EQ(m.quad.flipped_quads(), 0) << where << " (" << flipped << " flipped after the untangle)";
+  EXPECT_LE(m.quad.flipped_quads(), left) << where << " (" << flipped << " flipped after the untangle)";
   if (flipped > 0) EXPECT_GT(stats.collapsed_quads, 0) << where;
   EXPECT_LE(test::count_slivers(collapsed), test::count_slivers(untangled)) << where;
   EXPECT_LE(collapsed.num_quads(), untangled.num_quads() - stats.collapsed_quads) << where;
@@ -172,7 +173,11 @@ TEST(LayoutQuadsMeshes, EveryManifoldMeshGivesAValidQuadLayout) {
         EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << where;
         EXPECT_EQ(m.euler_characteristic, session.intake()->components[c].euler_characteristic) << where;
         EXPECT_EQ(test::irregular_vertices_off_singularities(quads), 0) << where;
-        expect_folds_collapsed(untangled, untangle.flipped_after, state, where);
+        // dragon-genus1 at 500 quads keeps 1 on its working mesh (2026-12-07); the session untangles
+        // and collapses on the input surface, where none stays (session_test:
+        // NoisyScanKeepsOnlyThePairsNearItsMapsFolds).
+        const int left = name == "dragon-genus1.obj" && target < 1000 ? 1 : 0;
+        expect_folds_collapsed(untangled, untangle.flipped_after, state, where, left);
       }
     }
   }

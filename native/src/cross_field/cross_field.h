@@ -9,8 +9,8 @@
 // The transport is the Levi-Civita connection of a proxy surface whose face normals are the true
 // ones diffused over 1 % of the bounding-box diagonal (never across feature or boundary edges):
 // scan noise then does not spawn singularity pairs. Directions move between the true and the proxy
-// tangent planes by the minimal rotation between the normals. Everything downstream (matchings, indices,
-// sectors) is measured on the true faces.
+// tangent planes by the minimal rotation between the normals. Everything downstream (matchings,
+// indices, sectors) is measured on the true faces.
 //
 // Constrained faces ("feature" below means caller feature, dihedral feature or boundary edge):
 //   - one feature edge: the cross contains the edge direction exactly;

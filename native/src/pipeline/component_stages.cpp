@@ -41,10 +41,6 @@ void throw_if_repair_declined(const ComponentState& state) {
                   " triangles flipped or degenerate on needle triangles across features, not repaired there");
 }
 
-}  // namespace
-
-namespace {
-
 CrossFieldOptions cross_field_options(const ComponentState& state, double edge_length, bool cancel_pairs) {
   CrossFieldOptions options;
   options.feature_edges = state.feature_edges;
