@@ -812,11 +812,12 @@ TEST(SessionMeshes, QuadsFarOffANeedleCoveredPartComeFromARemesh) {
   }
 }
 
-// dragon-genus1 (a noisy scan) at 500 quads. With its 115 close singularity pairs cancelled, the
+// dragon-genus1 (a noisy scan) at 500 quads. With its 125 close singularity pairs cancelled, the
 // seamless map keeps one flipped triangle and one wound one-ring after the short repair that such a
 // field gets (policy.h: bound_repair_where_pairs_were_cancelled). The pairs near them are kept
-// (11 measured) and the map of that field is regular: the quads have 251 singular points to follow,
-// not the 481 of the field without any pair cancelled (1 618 quads, 17 s; 2 776 quads, 33 s before).
+// (11 measured, 115 cancelled) and the map of that field is regular: the quads have 251 singular
+// points to follow, not the 481 of the field without any pair cancelled (1 618 quads, 17 s;
+// 2 776 quads, 33 s before).
 TEST(SessionMeshes, NoisyScanKeepsOnlyThePairsNearItsMapsFolds) {
   Session session(read_mesh_file(test::mesh_path("dragon-genus1.obj")));
   run_completed(session, Job::Remesh, 500);

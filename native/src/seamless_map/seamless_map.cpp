@@ -153,12 +153,13 @@ SeamlessMap compute_seamless_map(const TriMesh& mesh, const CrossField& field, c
   SeamlessMap out;
   out.param = std::move(solution.param);
   out.face_size = options.face_size;
-  out.bad_vertices = bad_vertices(mesh, out.param, *problem);
   const ParametrizationSolveStats& s = solution.stats;
   SeamlessMapStats& st = out.stats;
   st.flipped_triangles = s.flipped;
   st.degenerate_triangles = s.degenerate;
   st.winding_defects = s.winding_defects;
+  if (st.flipped_triangles + st.degenerate_triangles + st.winding_defects > 0)
+    out.bad_vertices = bad_vertices(mesh, out.param, *problem);
   st.max_transition_residual = max_transition_residual(mesh, out.param);
   st.energy = s.energy;
   st.ipopt_iterations = s.ipopt_iterations;

@@ -61,7 +61,8 @@ struct SeamlessMap {
   SeamlessMapStats stats;
   std::vector<double> face_size;  // the sizing field it was solved with (SeamlessMapOptions)
   std::vector<int> bad_vertices;  // where it is not regular (ascending): the corners of its flipped and
-                                  // degenerate triangles and the vertices wound off their cone
+                                  // degenerate triangles and the vertices wound off their cone; empty
+                                  // (not computed) when stats count none of them
 };
 
 // Feature and boundary edges that become isolines, from the cut graph's edge sectors. An edge is

@@ -281,17 +281,12 @@ std::vector<PairPath> paths_to_minus(const TriMesh& mesh, const CrossField& fiel
 
 // Faces within `rings` rings of vertices around the given halfedges' endpoints (#F flags).
 std::vector<char> faces_near(const TriMesh& mesh, const std::vector<int>& halfedges, int rings) {
-  std::vector<int> depth(mesh.num_vertices(), -1), queue;
-  for (int h : halfedges)
-    for (int v : {mesh.from(h), mesh.to(h)})
-      if (depth[v] < 0) depth[v] = 0, queue.push_back(v);
+  std::vector<int> ends;
+  for (int h : halfedges) ends.push_back(mesh.from(h)), ends.push_back(mesh.to(h));
+  const std::vector<int> depth = rings_from(mesh, ends);
   std::vector<char> near(mesh.num_faces(), 0);
-  for (size_t i = 0; i < queue.size(); ++i)
-    for (int h : outgoing_halfedges(mesh, queue[i])) {
-      near[h / 3] = 1;
-      if (depth[queue[i]] < rings && depth[mesh.to(h)] < 0)
-        depth[mesh.to(h)] = depth[queue[i]] + 1, queue.push_back(mesh.to(h));
-    }
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) near[f] |= depth[mesh.F(f, k)] <= rings;
   return near;
 }
 
