@@ -98,7 +98,8 @@ def target_kwargs(args):
 
 
 def process(binding, blender_mesh, path, args):
-    entry = {"input": path, "status": "ok", "reason": "", "quads": 0, "flipped_quads": 0, "seconds": 0.0}
+    entry = {"input": path, "status": "ok", "reason": "", "quads": 0, "flipped_quads": 0, "collapsed_edge_quads": 0,
+             "seconds": 0.0}
     start = time.perf_counter()
     try:
         source = import_mesh(blender_mesh, path)
@@ -114,8 +115,10 @@ def process(binding, blender_mesh, path, args):
         if figures.get("kept_parts", 0):  # complete except parts kept as triangles (selected)
             entry["status"] = "partial"
             entry["reason"] = f"{figures['kept_parts']} part(s) kept as {figures['kept_triangles']} triangles"
-        else:  # the operator selects the quads that face against the source surface
-            entry["flipped_quads"] = sum(p.select for p in result.data.polygons)
+        else:  # the operator selects the quads that face against the source surface (and those with a
+            # collapsed edge); the figures count each
+            entry["flipped_quads"] = int(figures.get("flipped_quads", 0))
+            entry["collapsed_edge_quads"] = int(figures.get("collapsed_edge_quads", 0))
             if figures.get("rescued_parts", 0):
                 entry["reason"] = (f"{figures['rescued_parts']} part(s) quadded again: with another field, "
                                    "on a remesh, finer or by splitting their triangles")
@@ -162,7 +165,7 @@ def main():
         traceback.print_exc()
         reason = f"the batch could not start: {type(e).__name__}: {e}"
         entries = [{"input": path, "status": "error", "reason": reason, "quads": 0, "flipped_quads": 0,
-                    "seconds": 0.0} for path in args.inputs]
+                    "collapsed_edge_quads": 0, "seconds": 0.0} for path in args.inputs]
     else:
         try:
             for path in args.inputs:

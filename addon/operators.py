@@ -107,6 +107,7 @@ def _quad_figures(report):
                 layout_components=int(extraction.get("layout_components", 0)),
                 symmetry=str(report.get("symmetry", {}).get("axes", "")),
                 flipped_quads=int(quad.get("flipped_quads", 0)),
+                collapsed_edge_quads=int(quad.get("collapsed_edge_quads", 0)),
                 hausdorff=float(quad.get("hausdorff", -1.0)))
 
 
@@ -507,12 +508,17 @@ class OBJECT_OT_qgp_quad_remesh(_TargetProperties, _JobOperator, bpy.types.Opera
             self.report({"WARNING"}, f"{message}; complete except {len(failed)} part(s) kept as their {len(kept)} "
                                      f"triangles (selected in Edit Mode): {_failed_parts(failed)}")
             return {"FINISHED"}
-        # Quads that face against the source surface (where it folds within one quad) are selected,
-        # so Edit Mode shows them; everything else is deselected.
-        flipped = blender_mesh.select_faces(obj.data, report.get("quad", {}).get("flipped_quad_ids", []))
+        # Quads that face against the source surface (where it folds within one quad), and quads with
+        # an edge of almost no length (two corners on one point), are selected, so Edit Mode shows
+        # them; everything else is deselected.
+        quad = report.get("quad", {})
+        flipped, collapsed = quad.get("flipped_quad_ids", []), quad.get("collapsed_edge_quad_ids", [])
+        blender_mesh.select_faces(obj.data, sorted(set(flipped) | set(collapsed)))
         if flipped:
-            message += f"; {flipped} quad(s) face against the source surface (selected in Edit Mode)"
-            warn = True
+            message += f"; {len(flipped)} quad(s) face against the source surface (selected in Edit Mode)"
+        if collapsed:
+            message += f"; {len(collapsed)} quad(s) have an edge of almost no length (selected in Edit Mode)"
+        warn = warn or bool(flipped) or bool(collapsed)
         self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
 

@@ -8,8 +8,9 @@ Each run is one `qgp remesh IN --faces N --report R` process (killed after --tim
 bound for a hang). The outcome of a run is checked from its report and its output file, as
 issue 23 asks of every part: only quads (besides parts kept as triangles), no non-manifold or
 inconsistently oriented edge, the Euler characteristic of the parts it stands for, no quad flipped
-against the input, and the Hausdorff distance (relative to the bounding-box diagonal). The CAD parts
-run a second time with their sharp edges kept (--sharp-angle), as a CAD user runs them. Writes
+against the input, no quad with a collapsed edge (two corners on one point), and the Hausdorff
+distance (relative to the bounding-box diagonal). The CAD parts run a second time with their sharp
+edges kept (--sharp-angle), as a CAD user runs them. Writes
 OUT/robustness.csv and OUT/robustness.md. Timings are figures, not checks.
 """
 import argparse
@@ -26,7 +27,7 @@ CAD_MESHES = "block.obj,cycloidal.ply,fandisk.obj,featuretype.ply,joint.obj,wing
 COLUMNS = ["mesh", "sharp_angle", "target", "exit", "outcome", "seconds", "quads", "kept_triangles", "rescued_parts",
            "parts",
            "failed_parts", "euler_expected", "euler", "non_manifold_edges", "inconsistent_edges", "flipped_quads",
-           "hausdorff", "repairs", "message"]
+           "collapsed_edge_quads", "hausdorff", "repairs", "message"]
 
 
 def parse_args():
@@ -79,6 +80,8 @@ def outcome_of(row):
         wrong.append("Euler characteristic")
     if row["flipped_quads"]:
         wrong.append("flipped quads")
+    if row["collapsed_edge_quads"]:
+        wrong.append("quads with a collapsed edge")
     if wrong:
         return "invalid: " + ", ".join(wrong)
     return "valid" if not row["failed_parts"] else "valid except parts kept as triangles"
@@ -113,6 +116,7 @@ def run_case(args, mesh, target, work, sharp_angle=None):
                failed_parts=len(report.get("failed_components", [])), euler_expected=expected_euler(report),
                euler=quad.get("euler_characteristic", ""), non_manifold_edges=quad.get("non_manifold_edges", ""),
                inconsistent_edges=quad.get("inconsistent_edges", ""), flipped_quads=quad.get("flipped_quads", ""),
+               collapsed_edge_quads=quad.get("collapsed_edge_quads", ""),
                hausdorff=round(quad["hausdorff"], 5) if "hausdorff" in quad else "", repairs=repairs_summary(report))
     error = report.get("error") or ""
     message = error.get("message", "") if isinstance(error, dict) else str(error)
@@ -127,15 +131,17 @@ def write_markdown(rows, path, targets):
     lines = ["# Every shared mesh through `qgp remesh`", "",
              "`bench/robustness.py` (one `qgp remesh` process per run, killed after the timeout). Outcome: "
              "valid = only quads, manifold and oriented, the Euler characteristic of the parts it stands for, "
-             "no quad flipped against the input. Hausdorff relative to the bounding-box diagonal. Rows with a "
-             "sharp angle keep the edges sharper than it as features (the CAD parts).", "",
-             "| mesh | target | outcome | s | quads | kept triangles | rescued parts | flipped | Hausdorff | repairs |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "no quad flipped against the input, no quad with a collapsed edge (two corners on one point). "
+             "Hausdorff relative to the bounding-box diagonal. Rows with a sharp angle keep the edges sharper "
+             "than it as features (the CAD parts).", "",
+             "| mesh | target | outcome | s | quads | kept triangles | rescued parts | flipped | collapsed edges | "
+             "Hausdorff | repairs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         name = r["mesh"] + (f" (sharp {r['sharp_angle']:g}°)" if r["sharp_angle"] != "" else "")
         lines.append(f"| {name} | {r['target']} | {r['outcome']} | {r['seconds']} | {r['quads']} | "
-                     f"{r['kept_triangles']} | {r['rescued_parts']} | {r['flipped_quads']} | {r['hausdorff']} | "
-                     f"{r['repairs']} |")
+                     f"{r['kept_triangles']} | {r['rescued_parts']} | {r['flipped_quads']} | "
+                     f"{r['collapsed_edge_quads']} | {r['hausdorff']} | {r['repairs']} |")
     plain = [r for r in rows if r["sharp_angle"] == ""]
     sharp = [r for r in rows if r["sharp_angle"] != ""]
     lines += ["", f"{sum(r['outcome'] == 'valid' for r in plain)} of {len(plain)} runs valid with every part "

@@ -422,6 +422,10 @@ void print_remesh_summary(const qgp::Json& report) {
   if (flipped > 0)
     std::cout << "warning: " << flipped << " quad(s) face against the input surface (report: quad.flipped_quad_ids, "
               << "0-based face order of the output); the surface folds within them\n";
+  const int collapsed = q.value("collapsed_edge_quads", 0);
+  if (collapsed > 0)
+    std::cout << "warning: " << collapsed << " quad(s) have an edge of almost no length, two corners on one point "
+              << "(report: quad.collapsed_edge_quad_ids)\n";
 }
 
 // How a rescued component was quadded, for its warning.

@@ -161,6 +161,18 @@ bool quad_is_flipped(const QuadMesh& quads, int q, const TriMesh& reference, con
   return quad_is_flipped(p, reference, reference_bvh);
 }
 
+bool quad_has_collapsed_edge(const Vec3 p[4]) {
+  double length[4], sum = 0;
+  for (int k = 0; k < 4; ++k) sum += length[k] = (p[(k + 1) % 4] - p[k]).norm();
+  return *std::min_element(length, length + 4) <= kCollapsedEdgeShare * sum / 4;
+}
+
+bool quad_has_collapsed_edge(const QuadMesh& quads, int q) {
+  Vec3 p[4];
+  for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
+  return quad_has_collapsed_edge(p);
+}
+
 namespace {
 
 // The reference surface per part, each with its own BVH, for judging a quad against its own part.
@@ -240,6 +252,7 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
     const TriMesh* own = by_part ? parts->mesh(quads.component[q]) : nullptr;
     if (own ? quad_is_flipped(p, *own, *parts->bvh(quads.component[q])) : quad_is_flipped(p, reference, reference_bvh))
       m.flipped_quad_ids.push_back(q);
+    if (quad_has_collapsed_edge(p)) m.collapsed_edge_quad_ids.push_back(q);
   }
   if (!deviations.empty()) {
     double sum = 0;
@@ -301,6 +314,8 @@ void to_json(Json& j, const QuadMetrics& m) {
   j["p95_angle_deviation_deg"] = m.p95_angle_deviation;
   j["flipped_quads"] = m.flipped_quads();
   j["flipped_quad_ids"] = m.flipped_quad_ids;
+  j["collapsed_edge_quads"] = m.collapsed_edge_quads();
+  j["collapsed_edge_quad_ids"] = m.collapsed_edge_quad_ids;
   j["hausdorff"] = m.hausdorff;
   j["hausdorff_quads_to_mesh"] = m.hausdorff_quads_to_mesh;
   j["hausdorff_mesh_to_quads"] = m.hausdorff_mesh_to_quads;
