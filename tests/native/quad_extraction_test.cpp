@@ -518,7 +518,9 @@ void expect_valid_cube_quads(const QuadMesh& quads, const CubeQuads& input) {
   EXPECT_EQ(t.non_manifold_edges + t.inconsistent_edges + t.degenerate_quads + t.unreferenced_vertices, 0);
   EXPECT_EQ(t.boundary_edges, 0);
   EXPECT_EQ(t.euler_characteristic, 2);
-  EXPECT_EQ(compute_quad_metrics(quads, input.cube.mesh, QuadMetricsOptions{}, progress).flipped_quads(), 0);
+  const QuadMetrics metrics = compute_quad_metrics(quads, input.cube.mesh, QuadMetricsOptions{}, progress);
+  EXPECT_EQ(metrics.flipped_quads(), 0);
+  EXPECT_EQ(metrics.collapsed_edge_quads(), 0);
   EXPECT_EQ(test::count_slivers(quads), 0);
   EXPECT_EQ(test::irregular_vertices_off_singularities(quads), 0);
   for (int v = 0; v < quads.num_vertices(); ++v)
@@ -604,6 +606,91 @@ TEST(CollapseFoldedQuads, SliverBesideAValence3CornerDissolvesIt) {
   EXPECT_EQ(removed, 2);
   EXPECT_EQ(squeezed.num_vertices() - quads.num_vertices(), removed);
   expect_valid_cube_quads(quads, input);
+}
+
+// The quads of `quads` with an edge between v and w, ascending.
+std::vector<int> quads_on_edge(const QuadMesh& quads, int v, int w) {
+  std::vector<int> found;
+  for (int q = 0; q < quads.num_quads(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = quads.Q(q, k), b = quads.Q(q, (k + 1) % 4);
+      if ((a == v && b == w) || (a == w && b == v)) found.push_back(q);
+    }
+  return found;
+}
+
+// A free vertex moved onto its neighbour on a cube face: the two quads on their edge have a
+// collapsed edge (triangles to the eye) and nothing is flipped. The metrics name those two quads;
+// the untangle of flipped quads leaves them; the collapse's first untangle moves the two corners
+// apart without changing the connectivity.
+TEST(CollapseFoldedQuads, CollapsedEdgeOnACubeFaceIsMovedApart) {
+  CubeQuads input;
+  QuadMesh& quads = input.quads;
+  const QuadTopology topology = quad_topology(quads);
+  auto inner = [&](int v) {
+    int extreme = 0;
+    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
+    return extreme == 1 && topology.valence[v] == 4;
+  };
+  int v = -1, w = -1;
+  for (int q = 0; q < quads.num_quads() && v < 0; ++q)
+    if (inner(quads.Q(q, 0)) && inner(quads.Q(q, 1))) v = quads.Q(q, 0), w = quads.Q(q, 1);
+  ASSERT_GE(v, 0);
+  quads.V.row(v) = quads.V.row(w);
+  quads.vertex_face[v] = quads.vertex_face[w];
+  const std::vector<int> collapsed = quads_on_edge(quads, v, w);
+  ASSERT_EQ(collapsed.size(), 2u);
+  for (int q = 0; q < quads.num_quads(); ++q)
+    EXPECT_EQ(quad_has_collapsed_edge(quads, q), q == collapsed[0] || q == collapsed[1]) << q;
+  const QuadMetrics metrics = compute_quad_metrics(quads, input.cube.mesh, QuadMetricsOptions{}, input.progress);
+  EXPECT_EQ(metrics.flipped_quads(), 0);
+  EXPECT_EQ(metrics.collapsed_edge_quad_ids, collapsed);
+  EXPECT_EQ(Json(metrics)["collapsed_edge_quads"], 2);
+  const QuadMesh moved = quads;
+  QuadMesh untangled = quads;
+  EXPECT_EQ(untangle_flipped_quads(untangled, input.cube.mesh, input.sharp, input.progress).moved_vertices, 0);
+  EXPECT_EQ(untangled.V, moved.V);
+  const UntangleStats stats = collapse_folded_quads(quads, input.cube.mesh, input.sharp, input.progress);
+  EXPECT_EQ(stats.collapsed_before, 2);
+  EXPECT_EQ(stats.collapsed_after, 0);
+  EXPECT_EQ(stats.collapsed_quads, 0);
+  EXPECT_GE(stats.moved_vertices, 1);
+  EXPECT_EQ(quads.Q, moved.Q);
+  expect_valid_cube_quads(quads, input);
+}
+
+// A quad vertex on a sharp cube edge moved onto the cube corner beside it, where another quad
+// vertex stays: neither could move (vertices at corners stay), so one of the two leaves the corner
+// along a cube edge. The corner keeps a vertex, every vertex on a cube edge stays on one, and no
+// edge stays collapsed.
+TEST(CollapseFoldedQuads, TwoVerticesOnACubeCornerAreMovedApart) {
+  CubeQuads input;
+  QuadMesh& quads = input.quads;
+  auto extreme_axes = [&](int v) {
+    int extreme = 0;
+    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
+    return extreme;
+  };
+  int corner = -1, v = -1;
+  for (int q = 0; q < quads.num_quads() && v < 0; ++q)
+    for (int k = 0; k < 4 && v < 0; ++k)
+      if (extreme_axes(quads.Q(q, k)) == 3 && extreme_axes(quads.Q(q, (k + 1) % 4)) == 2)
+        corner = quads.Q(q, k), v = quads.Q(q, (k + 1) % 4);
+  ASSERT_GE(v, 0);
+  std::vector<int> axes_before(quads.num_vertices());
+  for (int u = 0; u < quads.num_vertices(); ++u) axes_before[u] = extreme_axes(u);
+  const Vec3 corner_point = quads.V.row(corner).transpose();
+  quads.V.row(v) = quads.V.row(corner);
+  quads.vertex_face[v] = quads.vertex_face[corner];
+  ASSERT_EQ(quads_on_edge(quads, v, corner).size(), 2u);
+  const QuadMesh moved = quads;
+  const UntangleStats stats = collapse_folded_quads(quads, input.cube.mesh, input.sharp, input.progress);
+  EXPECT_EQ(stats.collapsed_before, 2);
+  EXPECT_EQ(stats.collapsed_after, 0);
+  EXPECT_EQ(quads.Q, moved.Q);
+  expect_valid_cube_quads(quads, input);
+  EXPECT_TRUE(quads.V.row(corner).transpose() == corner_point || quads.V.row(v).transpose() == corner_point);
+  for (int u = 0; u < quads.num_vertices(); ++u) EXPECT_GE(extreme_axes(u), std::min(2, axes_before[u])) << u;
 }
 
 // Moves vertex v of an exact map by delta, given in the chart of its outgoing halfedge h0, in every

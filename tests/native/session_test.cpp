@@ -56,6 +56,7 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   EXPECT_EQ(m.quad.topology.degenerate_quads, 0) << name;
   EXPECT_EQ(m.quad.topology.unreferenced_vertices, 0) << name;
   EXPECT_LE(m.quad.flipped_quads(), known_flipped_quads) << name;
+  EXPECT_EQ(m.quad.collapsed_edge_quads(), 0) << name;
   // Irregular vertices only where the map is singular.
   EXPECT_EQ(test::irregular_vertices_off_singularities(*quads), 0) << name;
   EXPECT_EQ(report["quad"]["faces"], quads->num_quads()) << name;

@@ -694,9 +694,12 @@ std::optional<QuadChoice> collapse_folds(const ComponentState& state, const Quad
   const UntangleStats collapse =
       state.full_mesh ? collapse_folded_quads(quads, *state.full_mesh, state.full_feature_edges, progress)
                       : collapse_folded_quads(quads, state.mesh, features, progress);
-  if (collapse.collapsed_quads == 0) return std::nullopt;
+  if (collapse.collapsed_quads == 0 && collapse.moved_vertices == 0) return std::nullopt;
   collapsed.untangle.flipped_after = collapse.flipped_after;
   collapsed.untangle.collapsed_quads = collapse.collapsed_quads;
+  collapsed.untangle.collapsed_before = collapse.collapsed_before;
+  collapsed.untangle.collapsed_after = collapse.collapsed_after;
+  collapsed.untangle.moved_vertices += collapse.moved_vertices;
   collapsed.untangle.seconds += collapse.seconds;
   collapsed.extraction.stats.singular_vertices = 0;
   for (char s : quads.vertex_singular) collapsed.extraction.stats.singular_vertices += s;

@@ -50,8 +50,9 @@
 //                  kFlipRescueShare         a small part whose quads stay flipped against the
 //                                           surface (also after the finer density): its split
 //                                           triangles, when they have none
-//                  collapse_folds           any part whose quads still stay flipped, or has slivers:
-//                                           those collapsed, while fewer stay so
+//                  collapse_folds           any part whose quads still stay flipped, or has slivers
+//                                           (or quads with a collapsed edge): those untangled, then
+//                                           collapsed, while fewer stay so
 #pragma once
 #include <limits>
 
@@ -314,9 +315,10 @@ QuadChoice quads_of_split_triangles(const ComponentState& state, double target_q
 // keep the part's quads regular, and closer to its surface: truck at 8 000 quads came within 1.55 %
 // of the diagonal instead of 0.83 % when its parts 30, 52 and 53, with 5, 1 and 1 quads flipped,
 // had them collapsed at the density asked instead of going to a finer one): the choice's quads
-// that stay flipped against the surface, and slivers, are collapsed (quad_extraction/
-// collapse_quads.h: a merge of two opposite corners, up to three irregular vertices each) on the
-// surface they are measured against: the choice with them collapsed, or nothing when none was.
+// that stay flipped against the surface, and slivers (quads with a collapsed edge among them), are
+// untangled once more, then collapsed (quad_extraction/collapse_quads.h: a merge of two opposite
+// corners, up to three irregular vertices each) on the surface they are measured against: the
+// choice with them moved or collapsed, or nothing when none was.
 std::optional<QuadChoice> collapse_folds(const ComponentState& state, const QuadChoice& choice, Progress& progress);
 
 }  // namespace qgp

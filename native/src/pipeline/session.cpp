@@ -529,7 +529,9 @@ void Session::collapse_folded_components(Progress& progress) {
                          {"collapsed_quads", folded->untangle.collapsed_quads},
                          {"removed_quads", choice.extraction.quads.num_quads() - folded->extraction.quads.num_quads()},
                          {"flipped_before", choice.untangle.flipped_after},
-                         {"flipped_after", folded->untangle.flipped_after}});
+                         {"flipped_after", folded->untangle.flipped_after},
+                         {"collapsed_edge_quads_before", folded->untangle.collapsed_before},
+                         {"collapsed_edge_quads_after", folded->untangle.collapsed_after}});
     state.collapsed_quads = std::move(folded);
   }
   if (!collapsed.empty()) report_["extraction"]["collapsed"] = std::move(collapsed);

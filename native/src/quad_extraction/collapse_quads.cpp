@@ -200,12 +200,15 @@ std::optional<Collapsed> collapse_diagonal(const QuadMesh& quads, const QuadTopo
 
 // A quad whose shorter diagonal is under this share of its longer is a sliver: nearly degenerate
 // (corner angles under about 11 degrees), and whether it faces with the surface or against it is a
-// matter of round-off where it lies along a crease (wingnut with edges over 40 degrees).
+// matter of round-off where it lies along a crease (wingnut with edges over 40 degrees). So is a
+// quad with a collapsed edge (metrics/quad_metrics.h), a triangle to the eye, whose two corners the
+// untangle could not move apart: cycloidal's 2 000 quads kept 33 such quads without their collapse,
+// none with it (and 4.1 % of the diagonal from the surface instead of 3.3 %).
 constexpr double kSliverDiagonalRatio = 0.1;
 bool is_sliver(const QuadMesh& quads, int q) {
   const double d0 = (quads.V.row(quads.Q(q, 2)) - quads.V.row(quads.Q(q, 0))).norm();
   const double d1 = (quads.V.row(quads.Q(q, 3)) - quads.V.row(quads.Q(q, 1))).norm();
-  return std::min(d0, d1) < kSliverDiagonalRatio * std::max(d0, d1);
+  return std::min(d0, d1) < kSliverDiagonalRatio * std::max(d0, d1) || quad_has_collapsed_edge(quads, q);
 }
 
 // Flipped quads, then slivers: fewer is better.
@@ -235,6 +238,14 @@ class FoldCollapser {
   }
 
   const Badness& badness() const { return badness_; }
+
+  // The untangle of every quad with a collapsed edge (and every flipped one), before any collapse.
+  UntangleStats separate_collapsed_edges() {
+    const UntangleStats stats =
+        untangle_flipped_quads_near(quads_, surface_, bvh_, curves_, {}, flipped_, progress_, kSeparateRings, true);
+    badness_ = {stats.flipped_after, count_slivers(quads_)};
+    return stats;
+  }
 
   // Returns the number of quads collapsed.
   int run() {
@@ -336,7 +347,7 @@ class FoldCollapser {
       trial.flipped[f] = changed ? quad_is_flipped(quads, f, surface_, bvh_) : flipped_[collapsed->old_quad[f]];
     }
     const UntangleStats untangle = untangle_flipped_quads_near(
-        quads, surface_, bvh_, curves_, near_vertex(quads, collapsed->merged), trial.flipped, progress_, rings_);
+        quads, surface_, bvh_, curves_, near_vertex(quads, collapsed->merged), trial.flipped, progress_, rings_, true);
     trial.badness = {untangle.flipped_after, count_slivers(quads)};
     trial.collapsed = std::move(*collapsed);
     return trial;
@@ -352,8 +363,9 @@ class FoldCollapser {
     topology_ = quad_topology(quads_);
   }
 
-  int rings_ = 1;              // of the untangle after a trial collapse
-  bool flipped_only_ = false;  // slivers are not candidates
+  static constexpr int kSeparateRings = 3;  // as untangle_flipped_quads' default
+  int rings_ = 1;                           // of the untangle after a trial collapse
+  bool flipped_only_ = false;               // slivers are not candidates
   QuadMesh& quads_;
   const TriMesh& surface_;
   const TriangleBvh bvh_;
@@ -381,8 +393,12 @@ UntangleStats collapse_folded_quads(QuadMesh& quads, const TriMesh& surface, con
   UntangleStats stats;
   FoldCollapser collapser(quads, surface, feature_edges, progress);
   stats.flipped_before = collapser.badness().flipped;
+  const UntangleStats separated = collapser.separate_collapsed_edges();
+  stats.collapsed_before = separated.collapsed_before;
   if (stats.flipped_before <= kMaxFlippedToCollapse) stats.collapsed_quads = collapser.run();
   stats.flipped_after = collapser.badness().flipped;
+  for (int q = 0; q < quads.num_quads(); ++q) stats.collapsed_after += quad_has_collapsed_edge(quads, q);
+  stats.moved_vertices = separated.moved_vertices;
   stats.seconds = timer.seconds();
   return stats;
 }

@@ -12,8 +12,9 @@ namespace qgp {
 
 // The feature and boundary edges of a surface as curves that quad vertices on them slide along.
 // Quad vertices at curve corners (surface vertices with other than two feature or boundary edges,
-// or where the curve turns by more than a degree) never move, and none slides past a corner, so the
-// quad edges along a curve keep its shape.
+// or where the curve turns by more than a degree) never move, and none slides onto or past a
+// corner, so the quad edges along a curve keep its shape (the untangle frees one of two quad
+// vertices that share a corner: untangle_quads.cpp).
 class FeatureCurves {
  public:
   FeatureCurves(const TriMesh& surface, const std::vector<char>& feature_edges)
@@ -53,18 +54,9 @@ class FeatureCurves {
       place.kind = Place::kCorner;
       return place;
     }
-    for (int k = 0; k < 3; ++k) {
-      const int u = surface_.F(f, k);
-      const Vec3 a = surface_.position(u), b = surface_.position(surface_.F(f, (k + 1) % 3));
-      const double tolerance = 1e-6 * (b - a).norm();
-      if (edges_at_[u].empty() || (p - a).norm() > tolerance) continue;
-      if (corner_[u]) {
-        place.kind = Place::kCorner;
-        return place;
-      }
-      place = {Place::kOnCurve, edges_at_[u][0],
-               surface_.from(surface_.edge_halfedge[edges_at_[u][0]]) == u ? 0.0 : 1.0};
-    }
+    const int u = curve_vertex_at(p, f);
+    if (u >= 0 && corner_[u]) place.kind = Place::kCorner;
+    if (u >= 0 && !corner_[u]) place = start_of(edges_at_[u][0], u);
     if (place.kind != Place::kFree) return place;
     for (int k = 0; k < 3; ++k) {
       const int e = surface_.edge_of[3 * f + k];
@@ -75,6 +67,24 @@ class FeatureCurves {
       place = {Place::kOnCurve, e, std::clamp((p - from).dot(along) / along.squaredNorm(), 0.0, 1.0)};
     }
     return place;
+  }
+
+  // Where a quad vertex at the corner at p (in surface triangle f) can leave it: the start of each
+  // curve edge there. None when p is not at a corner.
+  std::vector<Place> corner_exits(const Vec3& p, int f) const {
+    std::vector<Place> exits;
+    const int u = f >= 0 && f < surface_.num_faces() ? curve_vertex_at(p, f) : -1;
+    if (u >= 0 && corner_[u])
+      for (int e : edges_at_[u]) exits.push_back(start_of(e, u));
+    return exits;
+  }
+  // Unit direction from the curve vertex at a place's end of its edge (s = 0 or 1) into the edge.
+  Vec3 direction_from_end(const Place& place) const { return place.s == 0 ? direction(place) : -direction(place); }
+
+  // The place is at a corner (a curve's end, or where it turns).
+  bool at_corner(const Place& place) const {
+    const int h = surface_.edge_halfedge[place.edge];
+    return (place.s == 0 && corner_[surface_.from(h)]) || (place.s == 1 && corner_[surface_.to(h)]);
   }
 
   Vec3 point(const Place& place) const {
@@ -113,6 +123,22 @@ class FeatureCurves {
 
  private:
   bool is_curve(int e) const { return surface_.is_boundary_edge(e) || (!feature_edges_.empty() && feature_edges_[e]); }
+  // The vertex of triangle f on a curve that p lies on (within 1e-6 of an edge of f at it), or -1.
+  int curve_vertex_at(const Vec3& p, int f) const {
+    int at = -1;
+    for (int k = 0; k < 3; ++k) {
+      const int u = surface_.F(f, k);
+      const Vec3 a = surface_.position(u), b = surface_.position(surface_.F(f, (k + 1) % 3));
+      if (edges_at_[u].empty() || (p - a).norm() > 1e-6 * (b - a).norm()) continue;
+      if (corner_[u]) return u;
+      at = u;
+    }
+    return at;
+  }
+  // The place on curve edge e at its vertex u.
+  Place start_of(int e, int u) const {
+    return {Place::kOnCurve, e, surface_.from(surface_.edge_halfedge[e]) == u ? 0.0 : 1.0};
+  }
 
   const TriMesh& surface_;
   const std::vector<char>& feature_edges_;

@@ -45,16 +45,22 @@ void quality_terms(const QuadMesh& quads, const Star& star, const Vec3& x, std::
   }
 }
 
-// Fewer flipped quads (non-positive diagonal term), then a larger worst term, is better.
+// Fewer flipped quads (non-positive diagonal term), then fewer quads with a collapsed edge, then a
+// larger worst term, is better. A collapsed edge makes two corner terms zero, which is better than a
+// negative worst term: without its own rank the untangle would draw vertices onto their neighbours.
 struct StarKey {
-  int flipped = 0;
+  int flipped = 0, collapsed = 0;
   double worst = std::numeric_limits<double>::infinity();
   bool better_than(const StarKey& o) const {
-    return flipped < o.flipped || (flipped == o.flipped && worst > o.worst + 1e-12);
+    if (flipped != o.flipped) return flipped < o.flipped;
+    if (collapsed != o.collapsed) return collapsed < o.collapsed;
+    return worst > o.worst + 1e-12;
   }
 };
-StarKey star_key(const std::vector<double>& terms) {
+// collapsed: the star's quads with a collapsed edge.
+StarKey star_key(const std::vector<double>& terms, int collapsed) {
   StarKey key;
+  key.collapsed = collapsed;
   for (size_t i = 0; i < terms.size(); ++i) {
     key.worst = std::min(key.worst, terms[i]);
     if (i % 5 == 4 && !(terms[i] > 0)) ++key.flipped;
@@ -62,13 +68,36 @@ StarKey star_key(const std::vector<double>& terms) {
   return key;
 }
 
+// The star's quads with a collapsed edge (metrics/quad_metrics.h) when its vertex is at x.
+int collapsed_edges_in_star(const QuadMesh& quads, const Star& star, const Vec3& x) {
+  int collapsed = 0;
+  for (const std::array<int, 4>& quad : star.quads) {
+    Vec3 p[4];
+    p[0] = x;
+    for (int k = 1; k < 4; ++k) p[k] = quads.V.row(quad[k]).transpose();
+    collapsed += quad_has_collapsed_edge(p);
+  }
+  return collapsed;
+}
+
+// Quads flipped against the surface, then quads with a collapsed edge: fewer is better.
+struct Defects {
+  int flipped = 0, collapsed = 0;
+  bool operator<(const Defects& o) const {
+    return flipped < o.flipped || (flipped == o.flipped && collapsed < o.collapsed);
+  }
+  bool any() const { return flipped + collapsed > 0; }
+};
+
 // One untangle run over a quad mesh: its adjacency, which vertices may move, and how far.
 class Untangler {
  public:
-  // flipped: per quad, whether it is flipped, when known (else empty).
+  // flipped: per quad, whether it is flipped, when known (else empty). collapsed_edges: quads with a
+  // collapsed edge are untangled too (else they count as any other quad).
   Untangler(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh, const FeatureCurves& curves,
-            const std::vector<char>& near, std::vector<char> flipped, Progress& progress)
-      : quads_(quads),
+            const std::vector<char>& near, std::vector<char> flipped, bool collapsed_edges, Progress& progress)
+      : collapsed_edges_(collapsed_edges),
+        quads_(quads),
         surface_(surface),
         bvh_(bvh),
         near_(near),
@@ -84,8 +113,11 @@ class Untangler {
         flipped_[q] = is_flipped(q);
       }
     }
-    flipped_count_ = static_cast<int>(std::count(flipped_.begin(), flipped_.end(), 1));
-    if (flipped_count_ == 0) return;
+    collapsed_.assign(nq, 0);
+    for (int q = 0; q < nq && collapsed_edges_; ++q) collapsed_[q] = quad_has_collapsed_edge(quads, q);
+    count_.flipped = static_cast<int>(std::count(flipped_.begin(), flipped_.end(), 1));
+    count_.collapsed = static_cast<int>(std::count(collapsed_.begin(), collapsed_.end(), 1));
+    if (!count_.any()) return;
     vertex_quads_.resize(nv);
     neighbours_.resize(nv);
     for (int q = 0; q < nq; ++q)
@@ -111,9 +143,10 @@ class Untangler {
     }
     quad_normal_.assign(nq, Vec3::Zero());
     quad_scale_.assign(nq, 0);
+    if (collapsed_edges_) release_shared_corners();
   }
 
-  int flipped_count() const { return flipped_count_; }
+  const Defects& defects() const { return count_; }
   const std::vector<char>& flipped() const { return flipped_; }
   // Vertices away from where they started.
   int moved_vertices() const {
@@ -123,14 +156,15 @@ class Untangler {
   }
 
   // One round within `reach` mean edge lengths of the start: the free vertices of the flipped quads
-  // and `rings` rings around them improve their stars in turn; kept only if fewer quads are flipped.
+  // and of those with a collapsed edge, and `rings` rings around them, improve their stars in turn;
+  // kept only if fewer quads are flipped, or as many and fewer have a collapsed edge.
   bool round(double reach, int rings) {
     progress_.check_cancel();
     const int nv = quads_.num_vertices(), nq = quads_.num_quads();
     std::vector<char> in_region(nv, 0);
     std::vector<int> frontier;
     for (int q = 0; q < nq; ++q)
-      if (flipped_[q] && seeds(q))
+      if ((flipped_[q] || collapsed_[q]) && seeds(q))
         for (int k = 0; k < 4; ++k)
           if (!in_region[quads_.Q(q, k)]) in_region[quads_.Q(q, k)] = 1, frontier.push_back(quads_.Q(q, k));
     for (int r = 0; r < rings; ++r) {
@@ -148,9 +182,9 @@ class Untangler {
         for (int q : vertex_quads_[v])
           if (!is_affected[q]) is_affected[q] = 1, affected.push_back(q);
       }
-    int before = 0;
-    for (int q : affected) before += flipped_[q];
-    if (movable.empty() || before == 0) return false;
+    Defects before;
+    for (int q : affected) before.flipped += flipped_[q], before.collapsed += collapsed_[q];
+    if (movable.empty() || !before.any()) return false;
 
     std::vector<Vec3> old_position(movable.size());
     std::vector<int> old_face(movable.size());
@@ -186,12 +220,19 @@ class Untangler {
       }
       if (!any) break;
     }
-    std::vector<char> now(affected.size());
-    int after = 0;
-    for (size_t i = 0; i < affected.size(); ++i) after += now[i] = is_flipped(affected[i]);
+    std::vector<char> now_flipped(affected.size()), now_collapsed(affected.size());
+    Defects after;
+    for (size_t i = 0; i < affected.size(); ++i) {
+      after.flipped += now_flipped[i] = is_flipped(affected[i]);
+      after.collapsed += now_collapsed[i] = collapsed_edges_ && quad_has_collapsed_edge(quads_, affected[i]);
+    }
     if (after < before) {
-      for (size_t i = 0; i < affected.size(); ++i) flipped_[affected[i]] = now[i];
-      flipped_count_ -= before - after;
+      for (size_t i = 0; i < affected.size(); ++i) {
+        flipped_[affected[i]] = now_flipped[i];
+        collapsed_[affected[i]] = now_collapsed[i];
+      }
+      count_.flipped -= before.flipped - after.flipped;
+      count_.collapsed -= before.collapsed - after.collapsed;
       return true;
     }
     for (size_t i = 0; i < movable.size(); ++i) {
@@ -203,7 +244,8 @@ class Untangler {
   }
 
  private:
-  // A flipped quad starts a region when it has a vertex in near_ (every flipped quad when empty).
+  // A flipped quad, or one with a collapsed edge, starts a region when it has a vertex in near_ (every
+  // such quad when empty).
   bool seeds(int q) const {
     if (near_.empty()) return true;
     for (int k = 0; k < 4; ++k)
@@ -214,6 +256,52 @@ class Untangler {
     for (int k = 0; k < 4; ++k) p[k] = quads_.V.row(quads_.Q(q, k)).transpose();
   }
   bool is_flipped(int q) const { return quad_is_flipped(quads_, q, surface_, bvh_); }
+
+  // A vertex on a curve corner that a neighbour shares (a slide stops at a corner, so a second
+  // vertex can come to rest there: a collapsed edge that neither could leave) may leave it along the
+  // curve edge there that points most towards one of its other neighbours on a curve; the
+  // neighbour with the lower index keeps the corner.
+  void release_shared_corners() {
+    for (int v = 0; v < quads_.num_vertices(); ++v) {
+      if (place_[v].kind != FeatureCurves::Place::kCorner || !shares_its_point(v)) continue;
+      const Vec3 at = quads_.V.row(v).transpose();
+      double best = 0;
+      for (const FeatureCurves::Place& exit : curves_.corner_exits(at, quads_.vertex_face[v]))
+        for (int w : neighbours_[v]) {
+          const Vec3 towards = quads_.V.row(w).transpose() - at;
+          if (place_[w].kind == FeatureCurves::Place::kFree || towards.norm() <= kCollapsedEdgeShare * mean_edge_[v])
+            continue;
+          const double alignment = curves_.direction_from_end(exit).dot(towards.normalized());
+          if (alignment <= best) continue;
+          best = alignment;
+          place_[v] = exit;
+          fixed_[v] = 0;
+        }
+    }
+  }
+  // A neighbour with a lower index lies within kCollapsedEdgeShare of v's mean edge length.
+  bool shares_its_point(int v) const {
+    for (int w : neighbours_[v])
+      if (w < v && (quads_.V.row(w) - quads_.V.row(v)).norm() <= kCollapsedEdgeShare * mean_edge_[v]) return true;
+    return false;
+  }
+  int collapsed_in_star(const Star& star, const Vec3& x) const {
+    return collapsed_edges_ ? collapsed_edges_in_star(quads_, star, x) : 0;
+  }
+  StarKey key_at(const Star& star, const Vec3& x) {
+    quality_terms(quads_, star, x, terms_);
+    return star_key(terms_, collapsed_in_star(star, x));
+  }
+  // Puts v at x (in surface triangle `face`; at `place` on its curve when given) if its star is
+  // better there than `now`.
+  bool move_if_better(int v, const Star& star, const StarKey& now, const Vec3& x, int face,
+                      const FeatureCurves::Place* place = nullptr) {
+    if (!key_at(star, x).better_than(now)) return false;
+    quads_.V.row(v) = x.transpose();
+    quads_.vertex_face[v] = face;
+    if (place) place_[v] = *place;
+    return true;
+  }
 
   Star star_of(int v) const {
     Star star;
@@ -228,10 +316,15 @@ class Untangler {
   }
 
   // Moves v, within `reach` of its start, to where the worst quality term of its quads is largest:
-  // in its tangent plane and back onto the surface, or along its feature or boundary curve; true if
-  // its star got better.
+  // in its tangent plane and back onto the surface, or along its feature or boundary curve (never
+  // onto a corner); true if its star got better.
   bool improve_vertex(int v, double reach) {
-    if (place_[v].kind == FeatureCurves::Place::kOnCurve) return slide_vertex(v, reach);
+    if (place_[v].kind == FeatureCurves::Place::kOnCurve) return slide_vertex(v, reach) || spread_on_curve(v, reach);
+    return move_vertex(v, reach) || spread_on_surface(v, reach);
+  }
+
+  // The linear program's move of a free vertex (improve_vertex).
+  bool move_vertex(int v, double reach) {
     const Star star = star_of(v);
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
     const Vec3 n = surface_.face_normal_unnormalized(quads_.vertex_face[v]);
@@ -241,7 +334,7 @@ class Untangler {
     const Vec3 t2 = n.normalized().cross(t1);
     const Vec3 a1 = reach * t1, a2 = reach * t2;
     quality_terms(quads_, star, x0, c_);
-    const StarKey now = star_key(c_);
+    const StarKey now = star_key(c_, collapsed_in_star(star, x0));
     g_.assign(c_.size(), Vec2::Zero());
     quality_terms(quads_, star, x0 + a1, terms_);
     for (size_t i = 0; i < c_.size(); ++i) g_[i].x() = terms_[i] - c_[i];
@@ -254,40 +347,73 @@ class Untangler {
     for (double step = 1; step > 0.1; step *= 0.5) {
       const TriangleBvh::Hit hit = bvh_.closest_point(x0 + step * (d.x() * a1 + d.y() * a2));
       if (hit.triangle < 0 || (hit.point - origin).norm() > allowed) continue;
-      quality_terms(quads_, star, hit.point, terms_);
-      if (!star_key(terms_).better_than(now)) continue;
-      quads_.V.row(v) = hit.point.transpose();
-      quads_.vertex_face[v] = hit.triangle;
-      return true;
+      if (move_if_better(v, star, now, hit.point, hit.triangle)) return true;
     }
     return false;
+  }
+
+  // A vertex of a collapsed edge whose linear program found no better place (the worst term of its
+  // star is elsewhere) goes part of the way towards the middle of its other neighbours, or along its
+  // curve either way, where its star gets better (untangling with collapsed_edges only).
+  bool spread_on_surface(int v, double reach) {
+    const Star star = star_of(v);
+    const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
+    if (collapsed_in_star(star, x0) == 0) return false;
+    Vec3 middle = Vec3::Zero();
+    int count = 0;
+    for (int w : neighbours_[v]) {
+      const Vec3 x = quads_.V.row(w).transpose();
+      if ((x - x0).norm() > kCollapsedEdgeShare * mean_edge_[v]) middle += x, ++count;
+    }
+    if (count == 0) return false;
+    middle /= count;
+    const StarKey now = key_at(star, x0);
+    const double allowed = std::max(reach, (x0 - origin).norm());
+    for (double step = 0.5; step > 0.05; step *= 0.5) {
+      const TriangleBvh::Hit hit = bvh_.closest_point(x0 + step * (middle - x0));
+      if (hit.triangle >= 0 && (hit.point - origin).norm() <= allowed &&
+          move_if_better(v, star, now, hit.point, hit.triangle))
+        return true;
+    }
+    return false;
+  }
+  bool spread_on_curve(int v, double reach) {
+    const Star star = star_of(v);
+    const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
+    if (collapsed_in_star(star, x0) == 0) return false;
+    const StarKey now = key_at(star, x0);
+    const double allowed = std::max(reach, (x0 - origin).norm());
+    for (double step = 0.5; step > 0.05; step *= 0.5)
+      for (double sign : {1.0, -1.0})
+        if (slide_if_better(v, star, now, curves_.walk(place_[v], sign * step * reach), origin, allowed)) return true;
+    return false;
+  }
+  // Slides v to `place` on its curve if that is within `allowed` of its origin, not on a corner (where
+  // a quad vertex stays: sliding onto it would collapse their edge), and better for its star.
+  bool slide_if_better(int v, const Star& star, const StarKey& now, const FeatureCurves::Place& place,
+                       const Vec3& origin, double allowed) {
+    const Vec3 x = curves_.point(place);
+    return (x - origin).norm() <= allowed && !curves_.at_corner(place) &&
+           move_if_better(v, star, now, x, curves_.face(place), &place);
   }
 
   bool slide_vertex(int v, double reach) {
     const Star star = star_of(v);
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
     quality_terms(quads_, star, x0, c_);
-    const StarKey now = star_key(c_);
+    const StarKey now = star_key(c_, collapsed_in_star(star, x0));
     quality_terms(quads_, star, x0 + reach * curves_.direction(place_[v]), terms_);
     std::vector<double> g(c_.size());
     for (size_t i = 0; i < c_.size(); ++i) g[i] = terms_[i] - c_[i];
     const double d = maximize_worst_term_1d(c_, g);
     if (d == 0) return false;
     const double allowed = std::max(reach, (x0 - origin).norm());
-    for (double step = 1; step > 0.1; step *= 0.5) {
-      const FeatureCurves::Place place = curves_.walk(place_[v], step * d * reach);
-      const Vec3 x = curves_.point(place);
-      if ((x - origin).norm() > allowed) continue;
-      quality_terms(quads_, star, x, terms_);
-      if (!star_key(terms_).better_than(now)) continue;
-      quads_.V.row(v) = x.transpose();
-      quads_.vertex_face[v] = curves_.face(place);
-      place_[v] = place;
-      return true;
-    }
+    for (double step = 1; step > 0.1; step *= 0.5)
+      if (slide_if_better(v, star, now, curves_.walk(place_[v], step * d * reach), origin, allowed)) return true;
     return false;
   }
 
+  const bool collapsed_edges_;
   QuadMesh& quads_;
   const TriMesh& surface_;
   const TriangleBvh& bvh_;
@@ -295,8 +421,8 @@ class Untangler {
   const FeatureCurves& curves_;
   Progress& progress_;
   const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> start_;
-  std::vector<char> flipped_;  // per quad
-  int flipped_count_ = 0;
+  std::vector<char> flipped_, collapsed_;  // per quad: flipped; with a collapsed edge
+  Defects count_;
   std::vector<std::vector<int>> vertex_quads_, neighbours_;
   std::vector<FeatureCurves::Place> place_;  // per quad vertex: free, on a curve, or at a corner
   std::vector<char> fixed_;
@@ -315,7 +441,7 @@ UntangleStats untangle_flipped_quads(QuadMesh& quads, const TriMesh& surface, co
   const TriangleBvh bvh(surface);
   const FeatureCurves curves(surface, feature_edges);
   std::vector<char> flipped;
-  return untangle_flipped_quads_near(quads, surface, bvh, curves, {}, flipped, progress, max_rings);
+  return untangle_flipped_quads_near(quads, surface, bvh, curves, {}, flipped, progress, max_rings, false);
 }
 
 void check_untangle_inputs(const QuadMesh& quads, const TriMesh& surface, const std::vector<char>& feature_edges) {
@@ -327,21 +453,24 @@ void check_untangle_inputs(const QuadMesh& quads, const TriMesh& surface, const 
 
 UntangleStats untangle_flipped_quads_near(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh,
                                           const FeatureCurves& curves, const std::vector<char>& near,
-                                          std::vector<char>& flipped, Progress& progress, int max_rings) {
+                                          std::vector<char>& flipped, Progress& progress, int max_rings,
+                                          bool collapsed_edges) {
   Timer timer;
-  Untangler untangler(quads, surface, bvh, curves, near, std::move(flipped), progress);
+  Untangler untangler(quads, surface, bvh, curves, near, std::move(flipped), collapsed_edges, progress);
   UntangleStats stats;
-  stats.flipped_before = untangler.flipped_count();
+  stats.flipped_before = untangler.defects().flipped;
+  stats.collapsed_before = untangler.defects().collapsed;
   // A round that helped is repeated on what is left; one that did not widens the region.
   for (double reach : kReaches)
-    for (int rings = 0; rings <= max_rings && untangler.flipped_count() > 0;) {
+    for (int rings = 0; rings <= max_rings && untangler.defects().any();) {
       ++stats.rounds;
       if (untangler.round(reach, rings))
         ++stats.accepted_rounds;
       else
         ++rings;
     }
-  stats.flipped_after = untangler.flipped_count();
+  stats.flipped_after = untangler.defects().flipped;
+  stats.collapsed_after = untangler.defects().collapsed;
   stats.moved_vertices = untangler.moved_vertices();
   stats.seconds = timer.seconds();
   flipped = untangler.flipped();

@@ -12,8 +12,10 @@
 namespace qgp {
 
 struct UntangleStats {
-  int flipped_before = 0, flipped_after = 0;  // quads flipped against the surface normals
-  int moved_vertices = 0;                     // vertices at a new position
+  int flipped_before = 0, flipped_after = 0;      // quads flipped against the surface normals
+  int collapsed_before = 0, collapsed_after = 0;  // quads with a collapsed edge (metrics/quad_metrics.h;
+                                                  // reported by the collapse, collapse_quads.h)
+  int moved_vertices = 0;                         // vertices at a new position
   int accepted_rounds = 0, rounds = 0;
   int collapsed_quads = 0;  // folded quads removed by collapse_folded_quads (collapse_quads.h)
   double seconds = 0;
@@ -42,8 +44,13 @@ void check_untangle_inputs(const QuadMesh& quads, const TriMesh& surface, const 
 // runs it many times), starting only from flipped quads with a vertex in `near` (#V; every flipped
 // quad when empty). flipped: per quad, whether it is flipped, when known (else empty); on return,
 // after.
+// collapsed_edges: quads with a collapsed edge (two corners on one point: metrics/quad_metrics.h)
+// are untangled the same way, after the flipped ones: a round is also kept when as many quads are
+// flipped and fewer have such an edge, and no move makes one unless it unflips a quad (the final
+// clean-up, collapse_quads.h; the untangles that choose between layouts leave them to it).
 UntangleStats untangle_flipped_quads_near(QuadMesh& quads, const TriMesh& surface, const TriangleBvh& bvh,
                                           const FeatureCurves& curves, const std::vector<char>& near,
-                                          std::vector<char>& flipped, Progress& progress, int max_rings);
+                                          std::vector<char>& flipped, Progress& progress, int max_rings,
+                                          bool collapsed_edges);
 
 }  // namespace qgp
