@@ -183,7 +183,9 @@ def validate_output(vertices, faces, report):
     """Problems (a list of strings, empty when valid) of the polygon mesh a remesh produced: only
     quads, then the triangles of the parts the report names as kept; finite coordinates, indices in
     range; the quads edge-manifold and consistently oriented, with the Euler characteristic of the
-    quadded parts; no quad facing against the input (the report's figure)."""
+    quadded parts; no quad facing against the input (the report's figure) and none with a collapsed
+    edge (measured here: an edge no longer than 1/1000 of the quad's mean edge, two corners on one
+    point)."""
     problems = []
     failed = report.get("failed_components") or []
     quads = [f for f in faces if len(f) == 4]
@@ -213,7 +215,17 @@ def validate_output(vertices, faces, report):
     flipped = (report.get("quad") or {}).get("flipped_quads", 0)
     if flipped:
         problems.append(f"{flipped} quads face against the input")
+    if "an index out of range" not in problems:
+        collapsed = sum(collapsed_edge(vertices, f) for f in quads)
+        if collapsed:
+            problems.append(f"{collapsed} quads with a collapsed edge")
     return problems
+
+
+def collapsed_edge(vertices, quad):
+    """The quad has an edge no longer than 1/1000 of its mean edge (metrics/quad_metrics.h)."""
+    lengths = [math.dist(vertices[quad[k]], vertices[quad[(k + 1) % 4]]) for k in range(4)]
+    return min(lengths) <= 1e-3 * sum(lengths) / 4
 
 
 def rescue_problems(case, report):
