@@ -79,8 +79,9 @@ std::vector<double> mean_edge_length(const QuadMesh& quads) {
 }
 
 // The collapse after the untangle, as the session runs it: no quad stays flipped (but `left`), none
-// keeps a collapsed edge, slivers do not grow in number, the mesh stays a consistently oriented manifold of the part's Euler
-// characteristic on the surface, and only the collapsed quads (and dissolved doublets) go.
+// keeps a collapsed edge, slivers do not grow in number, the mesh stays a consistently oriented
+// manifold of the part's Euler characteristic on the surface, and only the collapsed quads (and
+// dissolved doublets) go.
 void expect_folds_collapsed(const QuadMesh& untangled, int flipped, const ComponentState& state,
                             const std::string& where, int left) {
   Progress progress;
