@@ -608,6 +608,13 @@ TEST(CollapseFoldedQuads, SliverBesideAValence3CornerDissolvesIt) {
   expect_valid_cube_quads(quads, input);
 }
 
+// How many faces of the cube [0, 4]^3 vertex v lies on (1: a face, 2: an edge, 3: a corner).
+int cube_sides(const QuadMesh& quads, int v) {
+  int sides = 0;
+  for (int a = 0; a < 3; ++a) sides += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
+  return sides;
+}
+
 // The quads of `quads` with an edge between v and w, ascending.
 std::vector<int> quads_on_edge(const QuadMesh& quads, int v, int w) {
   std::vector<int> found;
@@ -627,11 +634,7 @@ TEST(CollapseFoldedQuads, CollapsedEdgeOnACubeFaceIsMovedApart) {
   CubeQuads input;
   QuadMesh& quads = input.quads;
   const QuadTopology topology = quad_topology(quads);
-  auto inner = [&](int v) {
-    int extreme = 0;
-    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
-    return extreme == 1 && topology.valence[v] == 4;
-  };
+  auto inner = [&](int v) { return cube_sides(quads, v) == 1 && topology.valence[v] == 4; };
   int v = -1, w = -1;
   for (int q = 0; q < quads.num_quads() && v < 0; ++q)
     if (inner(quads.Q(q, 0)) && inner(quads.Q(q, 1))) v = quads.Q(q, 0), w = quads.Q(q, 1);
@@ -666,19 +669,14 @@ TEST(CollapseFoldedQuads, CollapsedEdgeOnACubeFaceIsMovedApart) {
 TEST(CollapseFoldedQuads, TwoVerticesOnACubeCornerAreMovedApart) {
   CubeQuads input;
   QuadMesh& quads = input.quads;
-  auto extreme_axes = [&](int v) {
-    int extreme = 0;
-    for (int a = 0; a < 3; ++a) extreme += std::abs(quads.V(v, a)) < 1e-9 || std::abs(quads.V(v, a) - 4) < 1e-9;
-    return extreme;
-  };
   int corner = -1, v = -1;
   for (int q = 0; q < quads.num_quads() && v < 0; ++q)
     for (int k = 0; k < 4 && v < 0; ++k)
-      if (extreme_axes(quads.Q(q, k)) == 3 && extreme_axes(quads.Q(q, (k + 1) % 4)) == 2)
+      if (cube_sides(quads, quads.Q(q, k)) == 3 && cube_sides(quads, quads.Q(q, (k + 1) % 4)) == 2)
         corner = quads.Q(q, k), v = quads.Q(q, (k + 1) % 4);
   ASSERT_GE(v, 0);
   std::vector<int> axes_before(quads.num_vertices());
-  for (int u = 0; u < quads.num_vertices(); ++u) axes_before[u] = extreme_axes(u);
+  for (int u = 0; u < quads.num_vertices(); ++u) axes_before[u] = cube_sides(quads, u);
   const Vec3 corner_point = quads.V.row(corner).transpose();
   quads.V.row(v) = quads.V.row(corner);
   quads.vertex_face[v] = quads.vertex_face[corner];
@@ -690,7 +688,7 @@ TEST(CollapseFoldedQuads, TwoVerticesOnACubeCornerAreMovedApart) {
   EXPECT_EQ(quads.Q, moved.Q);
   expect_valid_cube_quads(quads, input);
   EXPECT_TRUE(quads.V.row(corner).transpose() == corner_point || quads.V.row(v).transpose() == corner_point);
-  for (int u = 0; u < quads.num_vertices(); ++u) EXPECT_GE(extreme_axes(u), std::min(2, axes_before[u])) << u;
+  for (int u = 0; u < quads.num_vertices(); ++u) EXPECT_GE(cube_sides(quads, u), std::min(2, axes_before[u])) << u;
 }
 
 // Moves vertex v of an exact map by delta, given in the chart of its outgoing halfedge h0, in every

@@ -45,25 +45,34 @@ void quality_terms(const QuadMesh& quads, const Star& star, const Vec3& x, std::
   }
 }
 
-// Fewer flipped quads (non-positive diagonal term), then fewer quads with a collapsed edge, then a
-// larger worst term, is better. A collapsed edge makes two corner terms zero, which is better than a
-// negative worst term: without its own rank the untangle would draw vertices onto their neighbours.
-struct StarKey {
+// Quads flipped against the surface, then quads with a collapsed edge: fewer is better.
+struct Defects {
   int flipped = 0, collapsed = 0;
+  bool operator<(const Defects& o) const {
+    return flipped < o.flipped || (flipped == o.flipped && collapsed < o.collapsed);
+  }
+  bool any() const { return flipped + collapsed > 0; }
+};
+
+// Fewer defects in the star (a flip: a non-positive diagonal term), then a larger worst term, is
+// better. A collapsed edge makes two corner terms zero, which is better than a negative worst term:
+// without its own rank the untangle would draw vertices onto their neighbours.
+struct StarKey {
+  Defects defects;
   double worst = std::numeric_limits<double>::infinity();
   bool better_than(const StarKey& o) const {
-    if (flipped != o.flipped) return flipped < o.flipped;
-    if (collapsed != o.collapsed) return collapsed < o.collapsed;
+    if (defects < o.defects) return true;
+    if (o.defects < defects) return false;
     return worst > o.worst + 1e-12;
   }
 };
 // collapsed: the star's quads with a collapsed edge.
 StarKey star_key(const std::vector<double>& terms, int collapsed) {
   StarKey key;
-  key.collapsed = collapsed;
+  key.defects.collapsed = collapsed;
   for (size_t i = 0; i < terms.size(); ++i) {
     key.worst = std::min(key.worst, terms[i]);
-    if (i % 5 == 4 && !(terms[i] > 0)) ++key.flipped;
+    if (i % 5 == 4 && !(terms[i] > 0)) ++key.defects.flipped;
   }
   return key;
 }
@@ -79,15 +88,6 @@ int collapsed_edges_in_star(const QuadMesh& quads, const Star& star, const Vec3&
   }
   return collapsed;
 }
-
-// Quads flipped against the surface, then quads with a collapsed edge: fewer is better.
-struct Defects {
-  int flipped = 0, collapsed = 0;
-  bool operator<(const Defects& o) const {
-    return flipped < o.flipped || (flipped == o.flipped && collapsed < o.collapsed);
-  }
-  bool any() const { return flipped + collapsed > 0; }
-};
 
 // One untangle run over a quad mesh: its adjacency, which vertices may move, and how far.
 class Untangler {
@@ -269,8 +269,7 @@ class Untangler {
       for (const FeatureCurves::Place& exit : curves_.corner_exits(at, quads_.vertex_face[v]))
         for (int w : neighbours_[v]) {
           const Vec3 towards = quads_.V.row(w).transpose() - at;
-          if (place_[w].kind == FeatureCurves::Place::kFree || towards.norm() <= kCollapsedEdgeShare * mean_edge_[v])
-            continue;
+          if (place_[w].kind == FeatureCurves::Place::kFree || coincident(v, quads_.V.row(w).transpose())) continue;
           const double alignment = curves_.direction_from_end(exit).dot(towards.normalized());
           if (alignment <= best) continue;
           best = alignment;
@@ -279,11 +278,15 @@ class Untangler {
         }
     }
   }
-  // A neighbour with a lower index lies within kCollapsedEdgeShare of v's mean edge length.
+  // A neighbour with a lower index is coincident with v.
   bool shares_its_point(int v) const {
     for (int w : neighbours_[v])
-      if (w < v && (quads_.V.row(w) - quads_.V.row(v)).norm() <= kCollapsedEdgeShare * mean_edge_[v]) return true;
+      if (w < v && coincident(v, quads_.V.row(w).transpose())) return true;
     return false;
+  }
+  // x lies within kCollapsedEdgeShare of v's mean edge length of v: their edge would be collapsed.
+  bool coincident(int v, const Vec3& x) const {
+    return (x - quads_.V.row(v).transpose()).norm() <= kCollapsedEdgeShare * mean_edge_[v];
   }
   int collapsed_in_star(const Star& star, const Vec3& x) const {
     return collapsed_edges_ ? collapsed_edges_in_star(quads_, star, x) : 0;
@@ -319,13 +322,18 @@ class Untangler {
   // in its tangent plane and back onto the surface, or along its feature or boundary curve (never
   // onto a corner); true if its star got better.
   bool improve_vertex(int v, double reach) {
-    if (place_[v].kind == FeatureCurves::Place::kOnCurve) return slide_vertex(v, reach) || spread_on_curve(v, reach);
-    return move_vertex(v, reach) || spread_on_surface(v, reach);
+    const Star star = star_of(v);
+    const Vec3 x0 = quads_.V.row(v).transpose();
+    quality_terms(quads_, star, x0, c_);
+    const StarKey now = star_key(c_, collapsed_in_star(star, x0));
+    const bool spread = now.defects.collapsed > 0;
+    if (place_[v].kind == FeatureCurves::Place::kOnCurve)
+      return slide_vertex(v, reach, star, now) || (spread && spread_on_curve(v, reach, star, now));
+    return move_vertex(v, reach, star, now) || (spread && spread_on_surface(v, reach, star, now));
   }
 
-  // The linear program's move of a free vertex (improve_vertex).
-  bool move_vertex(int v, double reach) {
-    const Star star = star_of(v);
+  // The linear program's move of a free vertex (improve_vertex; c_ holds the star's terms now).
+  bool move_vertex(int v, double reach, const Star& star, const StarKey& now) {
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
     const Vec3 n = surface_.face_normal_unnormalized(quads_.vertex_face[v]);
     if (!(n.norm() > 0)) return false;
@@ -333,8 +341,6 @@ class Untangler {
     const Vec3 t1 = n.cross(std::abs(n.x()) < 0.9 * n.norm() ? Vec3::UnitX() : Vec3::UnitY()).normalized();
     const Vec3 t2 = n.normalized().cross(t1);
     const Vec3 a1 = reach * t1, a2 = reach * t2;
-    quality_terms(quads_, star, x0, c_);
-    const StarKey now = star_key(c_, collapsed_in_star(star, x0));
     g_.assign(c_.size(), Vec2::Zero());
     quality_terms(quads_, star, x0 + a1, terms_);
     for (size_t i = 0; i < c_.size(); ++i) g_[i].x() = terms_[i] - c_[i];
@@ -344,44 +350,39 @@ class Untangler {
     const Vec2 d = maximize_worst_term(c_, g_, centre, std::max(1.0, centre.norm()));
     if (d.isZero()) return false;
     const double allowed = std::max(reach, (x0 - origin).norm());
-    for (double step = 1; step > 0.1; step *= 0.5) {
-      const TriangleBvh::Hit hit = bvh_.closest_point(x0 + step * (d.x() * a1 + d.y() * a2));
-      if (hit.triangle < 0 || (hit.point - origin).norm() > allowed) continue;
-      if (move_if_better(v, star, now, hit.point, hit.triangle)) return true;
-    }
+    for (double step = 1; step > 0.1; step *= 0.5)
+      if (project_if_better(v, star, now, x0 + step * (d.x() * a1 + d.y() * a2), origin, allowed)) return true;
     return false;
+  }
+  // Moves v to the surface point closest to `target` if that is within `allowed` of its origin and
+  // better for its star.
+  bool project_if_better(int v, const Star& star, const StarKey& now, const Vec3& target, const Vec3& origin,
+                         double allowed) {
+    const TriangleBvh::Hit hit = bvh_.closest_point(target);
+    return hit.triangle >= 0 && (hit.point - origin).norm() <= allowed &&
+           move_if_better(v, star, now, hit.point, hit.triangle);
   }
 
   // A vertex of a collapsed edge whose linear program found no better place (the worst term of its
   // star is elsewhere) goes part of the way towards the middle of its other neighbours, or along its
   // curve either way, where its star gets better (untangling with collapsed_edges only).
-  bool spread_on_surface(int v, double reach) {
-    const Star star = star_of(v);
+  bool spread_on_surface(int v, double reach, const Star& star, const StarKey& now) {
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
-    if (collapsed_in_star(star, x0) == 0) return false;
     Vec3 middle = Vec3::Zero();
     int count = 0;
     for (int w : neighbours_[v]) {
       const Vec3 x = quads_.V.row(w).transpose();
-      if ((x - x0).norm() > kCollapsedEdgeShare * mean_edge_[v]) middle += x, ++count;
+      if (!coincident(v, x)) middle += x, ++count;
     }
     if (count == 0) return false;
     middle /= count;
-    const StarKey now = key_at(star, x0);
     const double allowed = std::max(reach, (x0 - origin).norm());
-    for (double step = 0.5; step > 0.05; step *= 0.5) {
-      const TriangleBvh::Hit hit = bvh_.closest_point(x0 + step * (middle - x0));
-      if (hit.triangle >= 0 && (hit.point - origin).norm() <= allowed &&
-          move_if_better(v, star, now, hit.point, hit.triangle))
-        return true;
-    }
+    for (double step = 0.5; step > 0.05; step *= 0.5)
+      if (project_if_better(v, star, now, x0 + step * (middle - x0), origin, allowed)) return true;
     return false;
   }
-  bool spread_on_curve(int v, double reach) {
-    const Star star = star_of(v);
+  bool spread_on_curve(int v, double reach, const Star& star, const StarKey& now) {
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
-    if (collapsed_in_star(star, x0) == 0) return false;
-    const StarKey now = key_at(star, x0);
     const double allowed = std::max(reach, (x0 - origin).norm());
     for (double step = 0.5; step > 0.05; step *= 0.5)
       for (double sign : {1.0, -1.0})
@@ -397,11 +398,9 @@ class Untangler {
            move_if_better(v, star, now, x, curves_.face(place), &place);
   }
 
-  bool slide_vertex(int v, double reach) {
-    const Star star = star_of(v);
+  // The 1-d linear program's slide of a vertex on a curve (improve_vertex; c_ holds the star's terms).
+  bool slide_vertex(int v, double reach, const Star& star, const StarKey& now) {
     const Vec3 x0 = quads_.V.row(v).transpose(), origin = start_.row(v).transpose();
-    quality_terms(quads_, star, x0, c_);
-    const StarKey now = star_key(c_, collapsed_in_star(star, x0));
     quality_terms(quads_, star, x0 + reach * curves_.direction(place_[v]), terms_);
     std::vector<double> g(c_.size());
     for (size_t i = 0; i < c_.size(); ++i) g[i] = terms_[i] - c_[i];
