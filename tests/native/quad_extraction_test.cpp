@@ -1443,6 +1443,40 @@ TEST(QuadExtraction, ClosestPointFacingSwitchesOnlyToASheetFacingTheOtherWay) {
   }
 }
 
+// The report's count takes, at a point as close to both sides of a crease, the side facing with the
+// quad (OnCrease::FacingSide): a quad lying on one side and reaching past the crease (beside a
+// concave feature curve) is not flipped, whichever of the two triangles comes first; the same quad
+// turned over is. The pipeline's rule (KeepClosest) keeps the triangle found first.
+TEST(QuadExtraction, AQuadPastACreaseFacesWithTheSideItLiesOnInTheReport) {
+  for (const bool swapped : {false, true}) {
+    TriMesh crease;
+    crease.V.resize(4, 3);
+    crease.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;  // z = 0 (normal -z) and y = 0 (normal -y)
+    crease.F.resize(2, 3);
+    if (swapped) {
+      crease.F << 0, 1, 3, 0, 2, 1;
+    } else {
+      crease.F << 0, 2, 1, 0, 1, 3;
+    }
+    build_connectivity(crease);
+    const TriangleBvh bvh(crease);
+    const int z0 = swapped ? 1 : 0, y0 = swapped ? 0 : 1;
+    const Vec3 outside(0.3, -0.1, -0.1);  // as close to both: the closest point is on the crease
+    EXPECT_EQ(bvh.closest_point_facing(outside, -Vec3::UnitZ(), 0.5, OnCrease::FacingSide).triangle, z0);
+    EXPECT_EQ(bvh.closest_point_facing(outside, -Vec3::UnitY(), 0.5, OnCrease::FacingSide).triangle, y0);
+    const int closest = bvh.closest_point(outside).triangle;
+    EXPECT_EQ(bvh.closest_point_facing(outside, Vec3::UnitZ(), 0.5, OnCrease::FacingSide).triangle, closest);
+
+    // In the plane z = 0, just past the crease (y < 0): normal -z, as triangle z0's.
+    const Vec3 past[4] = {{0.2, -0.3, 0}, {0.2, -0.02, 0}, {0.8, -0.02, 0}, {0.8, -0.3, 0}};
+    const Vec3 over[4] = {past[0], past[3], past[2], past[1]};
+    ASSERT_LT((past[2] - past[0]).cross(past[3] - past[1]).z(), 0);
+    EXPECT_FALSE(quad_is_flipped(past, crease, bvh, OnCrease::FacingSide)) << "swapped " << swapped;
+    EXPECT_TRUE(quad_is_flipped(over, crease, bvh, OnCrease::FacingSide)) << "swapped " << swapped;
+    EXPECT_TRUE(quad_is_flipped(over, crease, bvh, OnCrease::KeepClosest)) << "swapped " << swapped;
+  }
+}
+
 // The Hausdorff distance's samples are shared out among threads (core/parallel.h): every chunk
 // runs once, whatever the threads, and an exception of the calling thread's chunk (a cancel) leaves
 // only after the other threads have finished theirs.

@@ -133,7 +133,8 @@ double max_distance(const std::vector<Vec3>& samples, const TriangleBvh& target,
   return std::sqrt(*std::max_element(worst.begin(), worst.end()));
 }
 
-Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
+Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh,
+                           OnCrease on_crease) {
   // Interior points of the bilinear quad (unlike corners on a sharp edge) have an unambiguous
   // closest triangle when the quad lies on the surface.
   // Where coincident sheets face opposite ways, the one facing with the quad counts.
@@ -144,21 +145,22 @@ Vec3 quad_reference_normal(const Vec3 p[4], const TriMesh& reference, const Tria
   for (const auto& st : at) {
     const Vec3 x = (1 - st[0]) * (1 - st[1]) * p[0] + st[0] * (1 - st[1]) * p[1] + st[0] * st[1] * p[2] +
                    (1 - st[0]) * st[1] * p[3];
-    const TriangleBvh::Hit hit = reference_bvh.closest_point_facing(x, normal, tolerance);
+    const TriangleBvh::Hit hit = reference_bvh.closest_point_facing(x, normal, tolerance, on_crease);
     if (hit.triangle >= 0) sum += reference.face_normal_unnormalized(hit.triangle).normalized();
   }
   return sum;
 }
 
-bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh) {
+bool quad_is_flipped(const Vec3 p[4], const TriMesh& reference, const TriangleBvh& reference_bvh, OnCrease on_crease) {
   const Vec3 normal = (p[2] - p[0]).cross(p[3] - p[1]);
-  return !(normal.dot(quad_reference_normal(p, reference, reference_bvh)) > 0);
+  return !(normal.dot(quad_reference_normal(p, reference, reference_bvh, on_crease)) > 0);
 }
 
-bool quad_is_flipped(const QuadMesh& quads, int q, const TriMesh& reference, const TriangleBvh& reference_bvh) {
+bool quad_is_flipped(const QuadMesh& quads, int q, const TriMesh& reference, const TriangleBvh& reference_bvh,
+                     OnCrease on_crease) {
   Vec3 p[4];
   for (int k = 0; k < 4; ++k) p[k] = quads.V.row(quads.Q(q, k)).transpose();
-  return quad_is_flipped(p, reference, reference_bvh);
+  return quad_is_flipped(p, reference, reference_bvh, on_crease);
 }
 
 bool quad_has_collapsed_edge(const Vec3 p[4]) {
@@ -250,8 +252,9 @@ QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference
       deviations.push_back(std::abs(angle - 90));
     }
     const TriMesh* own = by_part ? parts->mesh(quads.component[q]) : nullptr;
-    if (own ? quad_is_flipped(p, *own, *parts->bvh(quads.component[q])) : quad_is_flipped(p, reference, reference_bvh))
-      m.flipped_quad_ids.push_back(q);
+    const bool flipped = own ? quad_is_flipped(p, *own, *parts->bvh(quads.component[q]), OnCrease::FacingSide)
+                             : quad_is_flipped(p, reference, reference_bvh, OnCrease::FacingSide);
+    if (flipped) m.flipped_quad_ids.push_back(q);
     if (quad_has_collapsed_edge(p)) m.collapsed_edge_quad_ids.push_back(q);
   }
   if (!deviations.empty()) {

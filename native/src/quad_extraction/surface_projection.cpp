@@ -180,22 +180,32 @@ bool TriangleBvh::face_opposite_ways(int i, int j) const {
   return a.dot(b) < -kOppositeSheets * a.norm() * b.norm();
 }
 
-TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& normal_wanted, double tolerance) const {
+TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& normal_wanted, double tolerance,
+                                                   OnCrease on_crease) const {
   const std::pair<Hit, int> found = closest_leaf(p);
   const Hit& closest = found.first;
   const int first = found.second;  // a plain local: the lambda below captures it (C++17)
   if (first < 0) return closest;
   if (normal(first).dot(normal_wanted) > 0) return closest;
-  const double reach = std::sqrt(closest.squared_distance) + tolerance;
-  Hit best;
+  const double distance = std::sqrt(closest.squared_distance);
+  const double reach = distance + tolerance;
+  const double tie = distance + kTieShare * reach;  // as close: the point on the crease they share
+  Hit best, best_on_crease;
   best.squared_distance = reach * reach;
+  double most_facing = 0;  // of the triangles on the crease: the one facing most with `normal_wanted`
   for_each_near(p, reach * reach, [&](int i) {
-    if (!(normal(i).dot(normal_wanted) > 0) || !face_opposite_ways(i, first)) return;
+    const Vec3 n = normal(i);
+    if (!(n.dot(normal_wanted) > 0)) return;
     const auto& t = triangles_[i];
     const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
     const double d = (q - p).squaredNorm();
-    if (d <= best.squared_distance) best = Hit{order_[i], q, d};
+    if (on_crease == OnCrease::FacingSide && d <= tie * tie) {
+      const double facing = n.normalized().dot(normal_wanted.normalized());
+      if (facing > most_facing) most_facing = facing, best_on_crease = Hit{order_[i], q, d};
+    }
+    if (face_opposite_ways(i, first) && d <= best.squared_distance) best = Hit{order_[i], q, d};
   });
+  if (best_on_crease.triangle >= 0) return best_on_crease;
   return best.triangle >= 0 ? best : closest;
 }
 

@@ -30,8 +30,14 @@ class TriangleBvh {
   // more than acos(kOppositeSheets) apart) and so with `normal`: then that one's point (the nearest
   // such). Two solids in face contact (cycloidal's rings and pins, sharing vertices but not
   // triangles there) leave two coincident sheets facing opposite ways; a quad on them faces with
-  // one of them. Across a crease (normals less far apart) the closest point stays.
-  Hit closest_point_facing(const Vec3& p, const Vec3& normal, double tolerance) const;
+  // one of them. Across a crease (normals less far apart) the closest point stays, unless
+  // `on_crease` is FacingSide and p is as close to a triangle on the crease's other side that faces
+  // with `normal`: p's closest point then lies on the crease, whose normal is any of its sides'
+  // (a quad just past a concave feature curve: wingnut with sharp edges at 2 000 quads), and the
+  // point of the one facing most with `normal` counts.
+  enum class OnCrease { KeepClosest, FacingSide };
+  Hit closest_point_facing(const Vec3& p, const Vec3& normal, double tolerance,
+                           OnCrease on_crease = OnCrease::KeepClosest) const;
 
   int num_triangles() const { return static_cast<int>(triangles_.size()); }
 
@@ -56,6 +62,9 @@ class TriangleBvh {
   Vec3 normal(int i) const;                     // of leaf-ordered triangle i, not normalized
   bool face_opposite_ways(int i, int j) const;  // leaf-ordered triangles, kOppositeSheets
   static constexpr double kOppositeSheets = 0.9;
+  // Distances equal up to this share of the search's reach are one (a closest point on a shared
+  // edge or vertex, found through either triangle, differs only by rounding).
+  static constexpr double kTieShare = 1e-9;
   // Median splits: the depth is at most log2 of the triangle count (below 31).
   static constexpr int kMaxDepth = 32;
 
