@@ -813,6 +813,33 @@ TEST(SessionMeshes, QuadsFarOffANeedleCoveredPartComeFromARemesh) {
   }
 }
 
+// cycloidal's pins with sharp edges: a needle cylinder whose caps are fans around a centre vertex.
+// Every cap face follows its rim edge, so the field gives the centre the cap's whole +4 quarter
+// turns, and three of them move out along spokes to the rim; spread around the cap, its map is
+// regular. Chosen by their residual alone (equal on every spoke up to rounding) they fell side by
+// side on seven of twelve such pins of cycloidal, whose maps then folded (28-36 of 96 triangles) and
+// whose rescue gave quads with scaled Jacobians down to -0.98.
+TEST(SessionMeshes, PinsWithFanCapsAreQuaddedOnTheirOwnTriangles) {
+  for (int k = 0; k < 12; ++k) {
+    const TriMesh pin = test::make_pin(24, 0.03125, 0.625, 0.37 * k, Vec3(0.3 + 0.11 * k, 1.1 - 0.07 * k, 0.883));
+    Session session(test::polygon_soup(pin));
+    run_completed(session, Job::Remesh, 20, 40);
+    EXPECT_FALSE(session.report().contains("rescued_components")) << "pin " << k;
+    EXPECT_EQ(session.report()["field"]["components"][0]["singularities"], 8) << "pin " << k;
+    const QuadMesh* quads = session.quad_result();
+    ASSERT_NE(quads, nullptr);
+    Progress progress;
+    const PolygonMeshMetrics m = measure_polygon_mesh(test::polygon_soup(*quads), session.intake()->mesh, 40, progress);
+    EXPECT_EQ(m.non_quads, 0);
+    EXPECT_EQ(m.non_manifold_edges, 0);
+    EXPECT_EQ(m.quad.topology.inconsistent_edges, 0);
+    EXPECT_EQ(m.quad.flipped_quads(), 0);
+    EXPECT_EQ(m.euler_characteristic, 2);
+    EXPECT_GT(m.sharp_edge_coverage, 0.95) << "pin " << k;
+    EXPECT_GT(m.quad.min_scaled_jacobian, 0.5) << "pin " << k;
+  }
+}
+
 // dragon-genus1 (a noisy scan) at 500 quads. With its 125 close singularity pairs cancelled, the
 // seamless map keeps one flipped triangle and one wound one-ring after the short repair that such a
 // field gets (policy.h: bound_repair_where_pairs_were_cancelled). The pairs near them are kept

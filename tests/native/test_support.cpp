@@ -231,6 +231,35 @@ TriMesh make_fan_cylinder(int segments, double radius, double height) {
   return mesh;
 }
 
+TriMesh make_pin(int segments, double radius, double height, double turn, const Vec3& at) {
+  TriMesh mesh;
+  mesh.V.resize(2 * segments + 2, 3);
+  auto place = [&](int v, double x, double y, double z) {
+    const Vec3 p = at + Vec3(x * std::cos(turn) - y * std::sin(turn), x * std::sin(turn) + y * std::cos(turn), z);
+    for (int k = 0; k < 3; ++k) mesh.V(v, k) = static_cast<float>(p[k]);
+  };
+  for (int i = 0; i < segments; ++i) {
+    const double a = 2 * M_PI * i / segments;
+    place(i, radius * std::cos(a), radius * std::sin(a), 0);
+    place(segments + i, radius * std::cos(a), radius * std::sin(a), height);
+  }
+  const int bottom = 2 * segments, top = 2 * segments + 1;
+  place(bottom, 0, 0, 0);
+  place(top, 0, 0, height);
+  std::vector<std::array<int, 3>> faces;
+  for (int i = 0; i < segments; ++i) {
+    const int j = (i + 1) % segments;
+    faces.push_back({i, j, segments + j});
+    faces.push_back({i, segments + j, segments + i});
+    faces.push_back({bottom, j, i});                     // facing -z
+    faces.push_back({top, segments + i, segments + j});  // facing +z
+  }
+  mesh.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
+  build_connectivity(mesh);
+  return mesh;
+}
+
 std::string identifier(std::string text) {
   for (char& c : text)
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';

@@ -68,6 +68,10 @@ PolygonSoup polygon_soup(const TriMesh& mesh);
 // A closed cylinder as CAD exports it: each side a quad cut into two needles from cap to cap, each
 // cap a fan from one rim vertex (needles again). Its rims are feature curves. Connectivity built.
 TriMesh make_fan_cylinder(int segments, double radius, double height);
+// A pin as CAD exports it (cycloidal's 96-triangle pins): the sides as in make_fan_cylinder, each
+// cap a fan around a centre vertex. Turned by `turn` radians about its axis, moved to `at`, and its
+// coordinates rounded to float precision (as a binary PLY stores them). Connectivity built.
+TriMesh make_pin(int segments, double radius, double height, double turn, const Vec3& at);
 
 // Irregular quad vertices (valence != 4 inside, != 3 on the boundary) not flagged vertex_singular.
 int irregular_vertices_off_singularities(const QuadMesh& quads);

@@ -427,8 +427,35 @@ std::vector<Sector> feature_sectors(const TriMesh& mesh, const std::vector<char>
 // Of the moves that keep the other sector at its minimum, the one with the smallest new residual
 // / misalignment. Returns the number of moves. shift (3#F, antisymmetric) receives the matching
 // changes of ordinary edges; eps, rho and edge_sector are updated.
+// Around an interior vertex, per spoke (the incoming halfedges `crossed`, in fan order): the angle
+// around the vertex to the nearest spoke whose matching a move already changed (shift != 0); the
+// whole angle sum where none has. The quarter turns a fan gives away go to spokes spread around it:
+// at the centre of a fan-triangulated cap bounded by a circular feature every spoke is equally
+// good, and the three chosen by the smallest residual alone fell side by side (cycloidal's pins
+// with sharp edges: rim corners 30 and 75 degrees apart, and the cap's map folded).
+std::vector<double> angles_from_moved_spokes(const TriMesh& mesh, const std::vector<int>& crossed,
+                                             const std::vector<int>& shift) {
+  const size_t k = crossed.size();
+  std::vector<double> at(k, 0.0);
+  double total = 0;
+  for (size_t j = 0; j < k; ++j) {
+    at[j] = total;
+    total += corner_angle(mesh, TriMesh::next(crossed[j]));
+  }
+  std::vector<double> apart(k, total);
+  for (size_t i = 0; i < k; ++i) {
+    if (shift[crossed[i]] == 0) continue;
+    for (size_t j = 0; j < k; ++j) {
+      const double a = std::abs(at[j] - at[i]);
+      apart[j] = std::min(apart[j], std::min(a, total - a));
+    }
+  }
+  return apart;
+}
+
 int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge, std::vector<double>& eps,
                               std::vector<double>& rho, std::vector<int8_t>& edge_sector, std::vector<int>& shift) {
+  constexpr double kSpreadTolerance = 1e-6;  // radians: spokes as far apart
   const int nh = mesh.num_halfedges();
   int resolved = 0;
   shift.assign(nh, 0);
@@ -458,6 +485,8 @@ int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feat
         moves.push_back({1, s.last, rho[s.last] - d * kQuarter, starts[s.last]});
       }
       for (int h : s.crossed) moves.push_back({2, h, eps[h] + d * kQuarter, crossed_in[mesh.opposite[h]]});
+      const std::vector<double> apart =
+          s.first < 0 ? angles_from_moved_spokes(mesh, s.crossed, shift) : std::vector<double>(moves.size(), 0.0);
       int best = -1;
       for (size_t i = 0; i < moves.size(); ++i) {
         const Move& m = moves[i];
@@ -465,7 +494,9 @@ int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feat
         if (touched[m.h] || touched[o]) continue;
         if (!(std::abs(m.deviation) < (m.kind == 2 ? M_PI : kQuarter))) continue;
         if (m.other >= 0 && !sectors[m.other].minimum_ok(sectors[m.other].turns - d)) continue;
-        if (best < 0 || std::abs(m.deviation) < std::abs(moves[best].deviation)) best = static_cast<int>(i);
+        if (best < 0 || apart[i] > apart[best] + kSpreadTolerance ||
+            (apart[i] > apart[best] - kSpreadTolerance && std::abs(m.deviation) < std::abs(moves[best].deviation)))
+          best = static_cast<int>(i);
       }
       if (best < 0) continue;
       const Move& m = moves[best];
