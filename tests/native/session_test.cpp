@@ -713,30 +713,21 @@ TEST(SessionMeshes, BlockKeepsItsSharpEdgesAt2000And8000) {
   EXPECT_TRUE(failed.empty()) << joined(failed);
 }
 
-// Block's triangles are far larger than a quad at 2 000 and 8 000 quads (its top disc a fan of 32
-// around one inner vertex): on them the map lays most of the disc's sharp rim on one straight
-// isoline and the quads cut across the rim (2.33 % and 1.21 % of the diagonal, 0.8-0.9 quad edges).
-// The part is quadded again on an isotropic remesh (policy.h: kMaxQuadDistanceInEdges), whose quads
-// lie within 0.5 % (0.25 % and 0.11 % measured) with the same 48 irregular vertices; a new density
-// in the same session keeps that remesh. At 500 quads its triangles are not over two quad edges
-// long and it keeps them (5.4 % off: docs/limitations.md).
-TEST(SessionMeshes, QuadsFarOffACoarseCadPartComeFromARemesh) {
-  Session at_500(read_mesh_file(test::mesh_path("block.obj")));
-  run_completed(at_500, Job::Remesh, 500, 40);
-  EXPECT_FALSE(at_500.report().contains("rescued_components"));
-  EXPECT_EQ(at_500.report()["working_mesh"]["remeshed_components"], 0);
-  Session redo(read_mesh_file(test::mesh_path("block.obj")));
-  for (double target : {2000.0, 8000.0}) {
+// Block's triangles are far larger than a quad at 2 000 and 8 000 quads, its top disc a fan of 32
+// around one inner vertex inside a circular sharp rim. Every face of the fan follows its rim edge, so
+// the fan's centre gets the disc's whole +4 quarter turns, and three move out to the rim. Chosen by
+// residual alone they fell side by side, the map laid most of the rim on one straight isoline and
+// the quads cut across it (5.4 %, 2.33 % and 1.21 % of the diagonal at 500, 2 000 and 8 000 quads;
+// the last two were rescued on an isotropic remesh). Spread around the disc (stop 65), the part's
+// own triangles give quads within 1 % at 500 quads and 0.5 % above, with no rescue.
+TEST(SessionMeshes, ACoarseCadPartsFanCapIsQuaddedOnItsOwnTriangles) {
+  for (double target : {500.0, 2000.0, 8000.0}) {
     Session session(read_mesh_file(test::mesh_path("block.obj")));
     run_completed(session, Job::Remesh, target, 40);
     const Json& report = session.report();
-    ASSERT_TRUE(report.contains("rescued_components")) << target;
-    EXPECT_EQ(report["rescued_components"][0]["rescue"], "isotropic working mesh");
-    EXPECT_EQ(report["working_mesh"]["remeshed_components"], 1) << target;
-    EXPECT_LE(expect_valid_output("block.obj", session, 40, 0).quad.hausdorff, 0.005) << target;
-    run_completed(redo, Job::Remesh, target, 40);  // 2 000, then 8 000 in the same session
-    EXPECT_EQ(redo.report()["working_mesh"]["remeshed_components"], 1) << target;
-    EXPECT_LE(expect_valid_output("block.obj", redo, 40, 0).quad.hausdorff, 0.005) << target;
+    EXPECT_FALSE(report.contains("rescued_components")) << target;
+    EXPECT_EQ(report["working_mesh"]["remeshed_components"], 0) << target;
+    EXPECT_LE(expect_valid_output("block.obj", session, 40, 0).quad.hausdorff, target < 1000 ? 0.01 : 0.005) << target;
   }
 }
 

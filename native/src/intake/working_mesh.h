@@ -46,8 +46,9 @@ bool has_needles_across_features(const TriMesh& mesh, const std::vector<char>& f
 // Likewise a component with feature edges whose triangles with an edge longer than
 // kCoarseEdgeInQuads quad edges (edge_length) cover more than that share of its area: the map is
 // linear on each triangle, so where a few large triangles fan around one inner vertex the field
-// can turn only there (block with edges over 40 degrees at 8 000 quads: a rim of 32 edges around
-// a fan of 32 triangles laid on one straight isoline for 29 of them, 1.21 % of the diagonal off).
+// can turn only there (block with edges over 40 degrees at 8 000 quads laid 29 of the 32 rim edges
+// around its fan on one straight isoline, 1.21 % of the diagonal off, before the fan's quarter turns
+// were spread around it in stop 65).
 // Such a part is remeshed to kCoarseRemeshFacesPerQuad triangles per quad (floored as below):
 // triangles about a quad's size are enough there, and cost less than the needles' count.
 constexpr double kCoarseEdgeInQuads = 2;

@@ -118,9 +118,10 @@ bool retry_without_cancelled_pairs(const ComponentState& state);
 // edges from its surface, either way, is also run again on an isotropic remesh, and takes those
 // quads when they lie closer: a map on needles can be regular and still cut across the part (a
 // CAD-style cylinder of needle fans at 2 000 quads: 8.6 % of the diagonal, 3 quad edges, on its
-// own triangles; 0.12 % on a remesh); on a few coarse triangles it lays a curved rim on one
-// straight isoline (block with edges over 40 degrees: 0.86 quad edges off at 8 000 quads, 1.21 % of
-// the diagonal; 0.10 % on a remesh).
+// own triangles; 0.12 % on a remesh); on a few coarse triangles it may lay a curved rim on one
+// straight isoline (block with edges over 40 degrees did, 1.21 % of the diagonal off at 8 000 quads,
+// until the quarter turns of its fan's centre were spread around the disc: cross_field.cpp,
+// angles_from_moved_spokes; 0.14 % on its own triangles now).
 constexpr double kMaxQuadDistanceInEdges = 0.5;
 bool remesh_may_bring_quads_closer(const ComponentState& state, Job job, double edge_length);
 // A remesh part that failed on its own triangles, which has feature edges and needles over
