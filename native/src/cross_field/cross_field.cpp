@@ -414,19 +414,6 @@ std::vector<Sector> feature_sectors(const TriMesh& mesh, const std::vector<char>
   return sectors;
 }
 
-// A sector must map to at least one quarter turn (exactly one when it is one face wide): with
-// fewer, its two edges lie on one isoline through the vertex and the faces between them (often a
-// whole strip between two feature curves) must fold. Nearest-axis choices miss this where the
-// field is a compromise near 45deg to both edges (acute sectors, sliver faces, exact ties).
-// Likewise an interior vertex needs index <= +1 (e.g. the centre of a fan-triangulated disc
-// bounded by a circular feature gets the whole +4 of the disc). A missing quarter turn is moved
-// into the sector from a neighbour, one per pass: across one of its inner edges (the edge's
-// matching changes; its other end becomes a singularity, or its sector there gives up a quarter
-// turn), or through one of its two bounding halfedges (that halfedge's own sector moves to its
-// second nearest axis, within 90deg; the sector at the edge's other end gives up a quarter turn).
-// Of the moves that keep the other sector at its minimum, the one with the smallest new residual
-// / misalignment. Returns the number of moves. shift (3#F, antisymmetric) receives the matching
-// changes of ordinary edges; eps, rho and edge_sector are updated.
 // Around an interior vertex, per spoke (the incoming halfedges `crossed`, in fan order): the angle
 // around the vertex to the nearest spoke whose matching a move already changed (shift != 0); the
 // whole angle sum where none has. The quarter turns a fan gives away go to spokes spread around it:
@@ -453,6 +440,20 @@ std::vector<double> angles_from_moved_spokes(const TriMesh& mesh, const std::vec
   return apart;
 }
 
+// A sector must map to at least one quarter turn (exactly one when it is one face wide): with
+// fewer, its two edges lie on one isoline through the vertex and the faces between them (often a
+// whole strip between two feature curves) must fold. Nearest-axis choices miss this where the
+// field is a compromise near 45deg to both edges (acute sectors, sliver faces, exact ties).
+// Likewise an interior vertex needs index <= +1 (e.g. the centre of a fan-triangulated disc
+// bounded by a circular feature gets the whole +4 of the disc). A missing quarter turn is moved
+// into the sector from a neighbour, one per pass: across one of its inner edges (the edge's
+// matching changes; its other end becomes a singularity, or its sector there gives up a quarter
+// turn), or through one of its two bounding halfedges (that halfedge's own sector moves to its
+// second nearest axis, within 90deg; the sector at the edge's other end gives up a quarter turn).
+// Of the moves that keep the other sector at its minimum, the one with the smallest new residual
+// / misalignment; around an interior vertex, the spoke farthest from those already moved first
+// (angles_from_moved_spokes), the residual only between equals. Returns the number of moves. shift (3#F, antisymmetric)
+// receives the matching changes of ordinary edges; eps, rho and edge_sector are updated.
 int resolve_collapsed_sectors(const TriMesh& mesh, const std::vector<char>& feature_edge, std::vector<double>& eps,
                               std::vector<double>& rho, std::vector<int8_t>& edge_sector, std::vector<int>& shift) {
   constexpr double kSpreadTolerance = 1e-6;  // radians: spokes as far apart

@@ -196,6 +196,8 @@ TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& no
   for_each_near(p, reach * reach, [&](int i) {
     const Vec3 n = normal(i);
     if (!(n.dot(normal_wanted) > 0)) return;
+    const bool other_sheet = face_opposite_ways(i, first);
+    if (!other_sheet && on_crease == OnCrease::KeepClosest) return;
     const auto& t = triangles_[i];
     const Vec3 q = closest_point_on_triangle(p, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
     const double d = (q - p).squaredNorm();
@@ -203,7 +205,7 @@ TriangleBvh::Hit TriangleBvh::closest_point_facing(const Vec3& p, const Vec3& no
       const double facing = n.normalized().dot(normal_wanted.normalized());
       if (facing > most_facing) most_facing = facing, best_on_crease = Hit{order_[i], q, d};
     }
-    if (face_opposite_ways(i, first) && d <= best.squared_distance) best = Hit{order_[i], q, d};
+    if (other_sheet && d <= best.squared_distance) best = Hit{order_[i], q, d};
   });
   if (best_on_crease.triangle >= 0) return best_on_crease;
   return best.triangle >= 0 ? best : closest;
