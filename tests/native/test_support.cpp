@@ -207,6 +207,28 @@ std::unique_ptr<Session> remeshed_session(const std::string& name, double target
   return session;
 }
 
+namespace {
+
+// The sides of a cylinder whose rims are vertices 0..segments-1 (z = 0) and segments..2*segments-1
+// (z = height): each side a quad cut into two needles from rim to rim.
+std::vector<std::array<int, 3>> cylinder_sides(int segments) {
+  std::vector<std::array<int, 3>> faces;
+  for (int i = 0; i < segments; ++i) {
+    const int j = (i + 1) % segments;
+    faces.push_back({i, j, segments + j});
+    faces.push_back({i, segments + j, segments + i});
+  }
+  return faces;
+}
+
+void set_faces(TriMesh& mesh, const std::vector<std::array<int, 3>>& faces) {
+  mesh.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
+  build_connectivity(mesh);
+}
+
+}  // namespace
+
 TriMesh make_fan_cylinder(int segments, double radius, double height) {
   TriMesh mesh;
   mesh.V.resize(2 * segments, 3);
@@ -215,48 +237,35 @@ TriMesh make_fan_cylinder(int segments, double radius, double height) {
     mesh.V.row(i) << radius * std::cos(a), radius * std::sin(a), 0;
     mesh.V.row(segments + i) << radius * std::cos(a), radius * std::sin(a), height;
   }
-  std::vector<std::array<int, 3>> faces;
-  for (int i = 0; i < segments; ++i) {
-    const int j = (i + 1) % segments;
-    faces.push_back({i, j, segments + j});
-    faces.push_back({i, segments + j, segments + i});
-  }
+  std::vector<std::array<int, 3>> faces = cylinder_sides(segments);
   for (int i = 1; i + 1 < segments; ++i) {
     faces.push_back({0, i + 1, i});                               // bottom, facing -z
     faces.push_back({segments, segments + i, segments + i + 1});  // top, facing +z
   }
-  mesh.F.resize(static_cast<int>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
-  build_connectivity(mesh);
+  set_faces(mesh, faces);
   return mesh;
 }
 
 TriMesh make_pin(int segments, double radius, double height, double turn, const Vec3& at) {
+  const int bottom = 2 * segments, top = 2 * segments + 1;
   TriMesh mesh;
   mesh.V.resize(2 * segments + 2, 3);
-  auto place = [&](int v, double x, double y, double z) {
-    const Vec3 p = at + Vec3(x * std::cos(turn) - y * std::sin(turn), x * std::sin(turn) + y * std::cos(turn), z);
+  mesh.V.topRows(2 * segments) = make_fan_cylinder(segments, radius, height).V;
+  mesh.V.row(bottom) << 0, 0, 0;
+  mesh.V.row(top) << 0, 0, height;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const double x = mesh.V(v, 0), y = mesh.V(v, 1);
+    const Vec3 p =
+        at + Vec3(x * std::cos(turn) - y * std::sin(turn), x * std::sin(turn) + y * std::cos(turn), mesh.V(v, 2));
     for (int k = 0; k < 3; ++k) mesh.V(v, k) = static_cast<float>(p[k]);
-  };
-  for (int i = 0; i < segments; ++i) {
-    const double a = 2 * M_PI * i / segments;
-    place(i, radius * std::cos(a), radius * std::sin(a), 0);
-    place(segments + i, radius * std::cos(a), radius * std::sin(a), height);
   }
-  const int bottom = 2 * segments, top = 2 * segments + 1;
-  place(bottom, 0, 0, 0);
-  place(top, 0, 0, height);
-  std::vector<std::array<int, 3>> faces;
+  std::vector<std::array<int, 3>> faces = cylinder_sides(segments);
   for (int i = 0; i < segments; ++i) {
     const int j = (i + 1) % segments;
-    faces.push_back({i, j, segments + j});
-    faces.push_back({i, segments + j, segments + i});
     faces.push_back({bottom, j, i});                     // facing -z
     faces.push_back({top, segments + i, segments + j});  // facing +z
   }
-  mesh.F.resize(static_cast<int>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) mesh.F.row(static_cast<int>(f)) << faces[f][0], faces[f][1], faces[f][2];
-  build_connectivity(mesh);
+  set_faces(mesh, faces);
   return mesh;
 }
 
