@@ -232,6 +232,37 @@ TEST(RescueMeshes, FinerDensitiesGoOnWhileQuadsStayFlipped) {
   EXPECT_LE(report["quad"]["flipped_quads"].get<int>(), 6);
 }
 
+int quads_with_a_collapsed_edge(const QuadMesh& quads) {
+  int count = 0;
+  for (int q = 0; q < quads.num_quads(); ++q) count += quad_has_collapsed_edge(quads, q);
+  return count;
+}
+
+// cycloidal at 500 quads (measured 2026-12-07): a washer (1 510 triangles, genus 1) gives no valid
+// quads at the density asked and 1-2 flipped ones of 17-20 at half the quad edge, none of 76 at a
+// quarter; the first finer density that gave valid quads was kept. And a ring of 328 triangles
+// (genus 1) gets its fewest quads, 5 on 5 vertices, folded onto each other: 4 with a collapsed
+// edge that neither the untangle nor the collapse remove. The finer densities go on while quads
+// stay flipped, and a part left with a collapsed edge is quadded again finer: no quad of the run is
+// flipped or has a collapsed edge (2 and 4 before).
+TEST(RescueMeshes, FinerDensitiesLeaveNoFlippedOrCollapsedQuadsOnCycloidal) {
+  Session session(read_mesh_file(test::mesh_path("cycloidal.ply")));
+  const Json report = remesh(session, 500);
+  expect_every_part_quadded("cycloidal@500", session);
+  EXPECT_EQ(report["quad"]["flipped_quads"].get<int>(), 0);
+  EXPECT_EQ(report["quad"]["collapsed_edge_quads"].get<int>(), 0);
+  int finer_for_collapsed_edges = 0;
+  for (const Json& r : report["rescued_components"]) {
+    if (r["rescue"] != "finer density") continue;
+    const QuadChoice& choice = session.components()[r["component"].get<int>()].quad_choice();
+    EXPECT_EQ(quads_with_a_collapsed_edge(choice.extraction.quads), 0) << r;
+    const std::string why = r["message"];
+    if (why.find("not form a valid mesh") != std::string::npos) EXPECT_EQ(choice.untangle.flipped_after, 0) << r;
+    if (why.find("kept a collapsed edge") != std::string::npos) ++finer_for_collapsed_edges;
+  }
+  EXPECT_GE(finer_for_collapsed_edges, 1);
+}
+
 // A torus whose tube is 1/20 of its ring, at 10 quads: the layout's quads around the tube do not
 // form a mesh (a double edge), so the only part is rescued at a finer density, and a density asked
 // again gives the same quads.

@@ -44,6 +44,8 @@
 //                  kFinerEdgeFactors        ...unless its quantized layout gave no valid quads (a hole
 //                                           or handle narrower than a quad) and the part alone at 1/2,
 //                                           else 1/4 of the quad edge length gives no more quads
+//                                           (while quads stay flipped at 1/2, the one of the two
+//                                           that leaves fewest)
 //   flipped part   kFinerFlipShare          a minor part whose quads stay flipped against the
 //                                           surface: alone at the finer density where fewest stay
 //                                           so, when fewer than its own
@@ -53,6 +55,10 @@
 //                  collapse_folds           any part whose quads still stay flipped, or has slivers
 //                                           (or quads with a collapsed edge): those untangled, then
 //                                           collapsed, while fewer stay so
+//   collapsed edge kFinerFlipShare          a minor part whose quads keep a collapsed edge after
+//                                           that (its fewest quads fold onto each other): alone at
+//                                           the finer density where fewest stay flipped, then
+//                                           collapsed, when fewer than its own
 #pragma once
 #include <limits>
 

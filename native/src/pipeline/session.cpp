@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <utility>
 
 #include "core/blas_kernels.h"
 #include "core/error.h"
@@ -397,13 +398,18 @@ bool Session::quad_without_cancelled_pairs(ComponentState& state, double target_
 
 bool Session::quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                                     Progress& progress) {
+  std::optional<ComponentState> best;
   for (const double factor : kFinerEdgeFactors) {
-    if (!quad_at_edge_factor(state, factor, target_quads, job, progress)) continue;
-    if (state.quads->extraction.quads.num_quads() > max_quads) return false;  // finer ones have more
-    state.finer_edge_factor = factor;
-    return true;
+    ComponentState finer = state;
+    if (!quad_at_edge_factor(finer, factor, target_quads, job, progress)) continue;
+    if (finer.quads->extraction.quads.num_quads() > max_quads) break;  // finer ones have more
+    finer.finer_edge_factor = factor;
+    if (!best || finer.quads->untangle.flipped_after < best->quads->untangle.flipped_after) best = std::move(finer);
+    if (best->quads->untangle.flipped_after == 0) break;
   }
-  return false;
+  if (!best) return false;
+  state = std::move(*best);
+  return true;
 }
 
 bool Session::unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
@@ -539,6 +545,63 @@ void Session::collapse_folded_components(Progress& progress) {
   rescue_seconds = rescue_seconds.get<double>() + timer.seconds();
 }
 
+namespace {
+int quads_with_a_collapsed_edge(const QuadMesh& quads) {
+  int count = 0;
+  for (int q = 0; q < quads.num_quads(); ++q) count += quad_has_collapsed_edge(quads, q);
+  return count;
+}
+// Flipped quads, then quads with a collapsed edge, of the quads in use (fewer is better).
+std::pair<int, int> quad_defects(const ComponentState& state) {
+  const QuadChoice& choice = state.quad_choice();
+  return {choice.untangle.flipped_after, quads_with_a_collapsed_edge(choice.extraction.quads)};
+}
+}  // namespace
+
+void Session::refine_parts_with_collapsed_edges(Progress& progress) {
+  Timer timer;
+  const std::vector<double> targets = rescue_quad_targets();
+  double quads_made = 0;
+  for (const ComponentState& state : components_)
+    if (state.quadded()) quads_made += state.quad_choice().extraction.quads.num_quads();
+  for (size_t c = 0; c < components_.size(); ++c) {
+    ComponentState& state = components_[c];
+    if (state.quadded() && !state.split_quads &&
+        state.quad_choice().extraction.quads.num_quads() <= kFinerFlipShare * quads_made &&
+        quad_defects(state).second > 0)
+      unfold_collapsed_edges_at_finer_density(state, targets[c], progress);
+  }
+  Json& rescue_seconds = report_["timings_s"]["rescue"];
+  rescue_seconds = rescue_seconds.get<double>() + timer.seconds();
+}
+
+bool Session::unfold_collapsed_edges_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
+  const std::pair<int, int> own = quad_defects(state);
+  std::optional<ComponentState> best;
+  std::pair<int, int> fewest = own;
+  for (const double factor : kFinerEdgeFactors) {
+    if (factor >= state.finer_edge_factor) continue;
+    ComponentState finer = state;
+    finer.collapsed_quads.reset();
+    if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
+    finer.collapsed_quads = collapse_folds(finer, finer.quad_choice(), progress);
+    const std::pair<int, int> left = quad_defects(finer);
+    if (!(left < fewest)) continue;
+    fewest = left;
+    finer.finer_edge_factor = factor;
+    best = std::move(finer);
+    if (left == std::make_pair(0, 0)) break;
+  }
+  if (!best) return false;
+  if (!best->failure)
+    best->failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                std::to_string(own.second) +
+                                    " quad(s) kept a collapsed edge at the density asked (its quads fold "
+                                    "onto each other)"};
+  state = std::move(*best);
+  return true;
+}
+
 void Session::mark_fields_without_cancelled_pairs() {
   Json& per_component = report_["field"]["components"];
   for (size_t c = 0; c < components_.size(); ++c)
@@ -604,6 +667,7 @@ void Session::run_remesh_stages(Job job, Progress& progress) {
       remesh_parts_off_their_surface(job, progress);
       rescue_flipped_components(progress);
       collapse_folded_components(progress);
+      refine_parts_with_collapsed_edges(progress);
       mark_fields_without_cancelled_pairs();
       report_["working_mesh"] = working_mesh_report(components_);  // with the parts rescued on a remesh
     }

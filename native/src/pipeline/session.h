@@ -111,8 +111,18 @@ class Session {
   // The last rung for flipped quads and slivers (policy.h: collapse_folds) on every quadded part;
   // the report's extraction.collapsed names the parts.
   void collapse_folded_components(Progress& progress);
-  // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them;
-  // false if none gives such quads.
+  // A minor part whose quads keep a collapsed edge after that (policy.h: kFinerFlipShare) is quadded
+  // again alone at the finer densities of kFinerEdgeFactors, its folds collapsed, until one leaves
+  // none flipped or collapsed; it takes the one that leaves fewest, if fewer than its own.
+  void refine_parts_with_collapsed_edges(Progress& progress);
+  // That for one part: its quads at the finer densities of kFinerEdgeFactors (below its own) in
+  // turn, each with its folds collapsed, until one leaves none flipped or with a collapsed edge; it
+  // takes the one that leaves fewest (flipped, then collapsed), if fewer than its own (state
+  // unchanged otherwise).
+  bool unfold_collapsed_edges_at_finer_density(ComponentState& state, double target_quads, Progress& progress);
+  // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them:
+  // the first valid ones, or while quads stay flipped in them, those of the finer density that
+  // leaves fewest flipped; false if none gives such quads (state unchanged then).
   bool quad_at_finer_density(ComponentState& state, double target_quads, int64_t max_quads, Job job,
                              Progress& progress);
   // The field report's close_pairs_kept for the parts quad_without_cancelled_pairs rescued.
