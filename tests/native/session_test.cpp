@@ -74,10 +74,10 @@ PolygonMeshMetrics expect_valid_output(const std::string& name, const Session& s
   const bool coarse = report["quantization"]["count"]["target"] < 1000;
   const bool coarse_mnf07 = name == "mnf07HeadFem_rem_rem_p.obj" && coarse;
   const bool coarse_joint = name == "joint_rem_p.obj" && coarse;
-  // dragon-genus1 at 500 quads: 5.5 % (1 618 quads; its horns and claws are thinner than a quad;
-  // measured 2026-12-07).
+  // dragon-genus1 at 500 quads: 6.2 % (1 166 quads; its horns and claws are thinner than a quad;
+  // measured 2026-12-07; 5.0 % with the 3 263 quads its flip rounds made before kMaxFlipRoundGrowth).
   const bool coarse_dragon = name == "dragon-genus1.obj" && coarse;
-  EXPECT_LT(m.quad.hausdorff, coarse_mnf07 ? 0.065 : coarse_joint || coarse_dragon ? 0.06 : 0.05) << name;
+  EXPECT_LT(m.quad.hausdorff, coarse_mnf07 || coarse_dragon ? 0.065 : coarse_joint ? 0.06 : 0.05) << name;
   if (sharp_angle > 0) EXPECT_GT(m.sharp_edge_coverage, 0.95) << name;
   // Integer-grid UVs for every input triangle intake kept.
   const std::vector<double>& uv = session.corner_uv();
@@ -885,6 +885,31 @@ TEST(SessionMeshes, NoisyScanHasItsFlippedQuadsCollapsed) {
   EXPECT_EQ(m.quad.flipped_quads(), 0);
   EXPECT_EQ(report["quad"]["flipped_quads"].get<int>(), 0);
   EXPECT_LT(m.quad.hausdorff, 0.065);
+}
+
+// The flip rounds keep zero T-edges beside flipped layout quads at length 1, and each adds a row of
+// quads. dragon-genus1 at 500 quads: the round that left 12 of 24 layout quads flipped gave 3 263
+// quads where its layout allows 1 219 at least (measured 2026-12-07); the final quads had none
+// flipped either way. A round is kept only while the quads stay within kMaxFlipRoundGrowth of those
+// before the rounds; cow at 8 000 keeps its round (1 -> 0 flipped layout quads, same count).
+TEST(SessionMeshes, FlipRoundsAddAtMostAQuarterOfTheQuads) {
+  for (const auto& [name, target] :
+       std::vector<std::pair<std::string, double>>{{"dragon-genus1.obj", 500}, {"cow.obj", 8000}}) {
+    Session session(read_mesh_file(test::mesh_path(name)));
+    run_completed(session, Job::Remesh, target);
+    expect_valid_output(name, session, -1);
+    const Json& quantization = session.report()["quantization"];
+    int rounds = 0;
+    for (const Json& c : quantization["components"]) {
+      EXPECT_LE(c["quads_expected"].get<double>(), kMaxFlipRoundGrowth * c["quads_before_flip_rounds"].get<double>())
+          << name;
+      rounds += c["flip_rounds"].get<int>();
+    }
+    if (name == "cow.obj") EXPECT_GE(rounds, 1) << "cow at 8 000 keeps its flip round (measured 2026-12-07)";
+    const Json& count = quantization["count"];
+    if (count.contains("fewest_quads"))
+      EXPECT_LE(session.quad_result()->num_quads(), kMaxFlipRoundGrowth * count["fewest_quads"].get<double>()) << name;
+  }
 }
 
 // Runs whose quads used to fold against the surface (camelhead's thin ears, coarse limbs and heads)

@@ -42,7 +42,8 @@ struct Quantized {
   // quads flipped against the surface before and after them (-1: the layout is not a valid mesh).
   int flip_rounds = 0;
   int flipped_layout_quads_before = 0, flipped_layout_quads = 0;
-  double flip_seconds = 0;  // the layouts placed, untangled and judged, and the re-quantizations
+  int64_t quads_before_flip_rounds = 0;  // the quantization's quads before them
+  double flip_seconds = 0;               // the layouts placed, untangled and judged, and the re-quantizations
   // The quad count asked of this component (0: none, an edge length was asked), the scale the
   // density gave, the re-quantizations that moved the scale toward the count, and the fewest
   // quads the layout allows when they are more than asked (-1: not measured).

@@ -114,11 +114,14 @@ LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>
 // sharply curved part: cells collapsed beside them squeeze the quads there), the zero T-edges around
 // their cells, then up to kMaxFlipRings cells away, are kept at length 1 and the T-mesh is
 // quantized again, up to kMaxFlipRounds times; a round is kept only when its layout is valid and
-// has fewer flipped quads. No round is tried when more than kMaxFlipShare of the quads stay flipped.
+// has fewer flipped quads, and at most kMaxFlipRoundGrowth times the quads of the first. No round is
+// tried when more than kMaxFlipShare of the quads stay flipped.
 void keep_zero_edges_where_layout_flips(const ComponentState& state, QuantizationOptions& options, Quantized& q,
                                         Progress& progress) {
   Timer timer;
   const TMesh& tmesh = state.traced->tmesh;
+  q.quads_before_flip_rounds = q.result.quads_expected;
+  const double most_quads = kMaxFlipRoundGrowth * q.result.quads_expected;
   LayoutFlips best = layout_flips(state, q.result.x, progress);
   q.flipped_layout_quads_before = best.valid ? best.count : -1;
   const bool hopeless = best.count > kMaxFlipShare * best.layout.quads.num_quads();
@@ -134,6 +137,7 @@ void keep_zero_edges_where_layout_flips(const ComponentState& state, Quantizatio
     trial.min_length.resize(tmesh.edges.size(), 0);
     for (int e : edges) trial.min_length[e] = 1;
     QuantizationResult result = quantize(tmesh, trial, progress);
+    if (result.quads_expected > most_quads) break;  // wider rings keep more edges at 1
     LayoutFlips flips = layout_flips(state, result.x, progress);
     if (!flips.better_than(best)) {
       ++rings;

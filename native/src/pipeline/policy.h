@@ -155,6 +155,11 @@ constexpr int kMaxFlipRings = 3;
 // No flip round is tried when more than this share of the layout's quads stay flipped (cycloidal's
 // small gear parts: 30 of 115, 47 of 263; the rounds cost seconds there and left them flipped).
 constexpr double kMaxFlipShare = 0.05;
+// A flip round is kept only while its quantization has at most this many times the quads of the one
+// before the flip rounds: each zero edge kept at 1 adds a row of quads, and the final quads are
+// untangled and collapsed anyway (dragon-genus1 at 500 quads: the round that left 12 of 24 layout
+// quads flipped kept 583 edges at 1 and gave 3 263 quads for the 1 219 the layout allows at least).
+constexpr double kMaxFlipRoundGrowth = 1.25;
 // Symmetry, relative to the bounding-box diagonal: input vertices this close to a plane are moved
 // onto it before the cut (no sliver beside them), and the half's quad boundary vertices this close
 // are welded to their mirror image (extraction puts them on the plane; projection onto a decimated
@@ -184,7 +189,8 @@ std::vector<char> sharp_tip_vertices(const TriMesh& mesh);
 // layout's quads placed on the surface stay flipped against it (collapsed cells squeeze them where
 // the part is thin or sharply curved), the zero edges around their cells are kept at 1 the same
 // way, up to kMaxFlipRounds times and kMaxFlipRings cells away; a round is kept only when it leaves
-// fewer flipped quads in a valid layout. The quads keep their size where that needs no collapse.
+// fewer flipped quads in a valid layout, with at most kMaxFlipRoundGrowth times the quads. The quads
+// keep their size where that needs no collapse.
 Quantized quantize_without_folds(const ComponentState& state, QuantizationResult first, Progress& progress);
 
 // Re-quantizations that move the scale toward a component's share of the quad count asked...

@@ -198,6 +198,7 @@ Json quantization_report(const std::vector<ComponentState>& components, Quantize
     entry["flip_rounds"] = q.flip_rounds;
     entry["flipped_layout_quads_before"] = q.flipped_layout_quads_before;
     entry["flipped_layout_quads"] = q.flipped_layout_quads;
+    entry["quads_before_flip_rounds"] = q.quads_before_flip_rounds;
     entry["flip_seconds"] = q.flip_seconds;
     entry["target_quads"] = q.target_quads;
     entry["nominal_scale"] = q.nominal_scale;
