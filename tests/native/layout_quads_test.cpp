@@ -59,10 +59,12 @@ int allowed_flips_after_untangle(const std::string& name, double target, int qua
 // 2.0 % (mnf07, 2 000). Known exceptions (2026-11-27): dragon-genus1 at 2 000, 4.4 % (3.5 % on
 // 2026-12-06: here it follows the 500 run in one session and keeps that run's field, whose 481
 // singular points allow no fewer than 3 410 quads, in a layout far from its surface; a session of
-// its own gives 2 377 quads), and mnf07 at 500 quads, 6.3 % after the untangle (3.8 % before it).
+// its own gives 2 377 quads), mnf07 at 500 quads, 6.3 % after the untangle (3.8 % before it), and
+// dragon-genus1 at 500 quads, 6.3 % (2026-12-07: 1 166 quads since its flip rounds stay within
+// kMaxFlipRoundGrowth of the quads; 3 263 before, within 6 %).
 double hausdorff_bound(const std::string& name, double target) {
   if (name == "dragon-genus1.obj" && target >= 1000) return 0.045;
-  if (name == "mnf07HeadFem_rem_rem_p.obj" && target < 1000) return 0.065;
+  if ((name == "mnf07HeadFem_rem_rem_p.obj" || name == "dragon-genus1.obj") && target < 1000) return 0.065;
   return 0.06 * std::sqrt(500 / target);
 }
 
