@@ -232,12 +232,6 @@ TEST(RescueMeshes, FinerDensitiesGoOnWhileQuadsStayFlipped) {
   EXPECT_LE(report["quad"]["flipped_quads"].get<int>(), 6);
 }
 
-int quads_with_a_collapsed_edge(const QuadMesh& quads) {
-  int count = 0;
-  for (int q = 0; q < quads.num_quads(); ++q) count += quad_has_collapsed_edge(quads, q);
-  return count;
-}
-
 // cycloidal at 500 quads (measured 2026-12-07): a washer (1 510 triangles, genus 1) gives no valid
 // quads at the density asked and 1-2 flipped ones of 17-20 at half the quad edge, none of 76 at a
 // quarter; the first finer density that gave valid quads was kept. And a ring of 328 triangles

@@ -175,6 +175,12 @@ bool quad_has_collapsed_edge(const QuadMesh& quads, int q) {
   return quad_has_collapsed_edge(p);
 }
 
+int quads_with_a_collapsed_edge(const QuadMesh& quads) {
+  int count = 0;
+  for (int q = 0; q < quads.num_quads(); ++q) count += quad_has_collapsed_edge(quads, q);
+  return count;
+}
+
 namespace {
 
 // The reference surface per part, each with its own BVH, for judging a quad against its own part.

@@ -100,6 +100,8 @@ constexpr double kCollapsedEdgeShare = 1e-3;
 bool quad_has_collapsed_edge(const Vec3 p[4]);
 // The same for quad q of `quads`.
 bool quad_has_collapsed_edge(const QuadMesh& quads, int q);
+// The quads of `quads` with a collapsed edge.
+int quads_with_a_collapsed_edge(const QuadMesh& quads);
 
 // reference: the triangle surface the quads approximate (normals for flips, Hausdorff distance).
 QuadMetrics compute_quad_metrics(const QuadMesh& quads, const TriMesh& reference, const QuadMetricsOptions& options,

@@ -414,18 +414,7 @@ bool Session::quad_at_finer_density(ComponentState& state, double target_quads, 
 
 bool Session::unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
   const int flipped = state.quads->untangle.flipped_after;
-  std::optional<ComponentState> best;
-  int fewest = flipped;
-  for (const double factor : kFinerEdgeFactors) {
-    ComponentState finer = state;
-    if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
-    const int left = finer.quads->untangle.flipped_after;
-    if (left >= fewest) continue;
-    fewest = left;
-    finer.finer_edge_factor = factor;
-    best = std::move(finer);
-    if (left == 0) break;
-  }
+  std::optional<ComponentState> best = quad_finer_with_fewer_defects(state, target_quads, false, progress);
   if (!best) return false;
   best->failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
                               std::to_string(flipped) +
@@ -433,6 +422,35 @@ bool Session::unflip_at_finer_density(ComponentState& state, double target_quads
                                   "asked (it folds within them)"};
   state = std::move(*best);
   return true;
+}
+
+namespace {
+// Flipped quads, then (with_collapsed) quads with a collapsed edge, of the quads in use: fewer is
+// better.
+std::pair<int, int> quad_defects(const ComponentState& state, bool with_collapsed) {
+  const QuadChoice& choice = state.quad_choice();
+  return {choice.untangle.flipped_after, with_collapsed ? quads_with_a_collapsed_edge(choice.extraction.quads) : 0};
+}
+}  // namespace
+
+std::optional<ComponentState> Session::quad_finer_with_fewer_defects(const ComponentState& state, double target_quads,
+                                                                     bool collapsed_edges, Progress& progress) {
+  std::pair<int, int> fewest = quad_defects(state, collapsed_edges);
+  std::optional<ComponentState> best;
+  for (const double factor : kFinerEdgeFactors) {
+    if (factor >= state.finer_edge_factor) continue;
+    ComponentState finer = state;
+    finer.collapsed_quads.reset();
+    if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
+    if (collapsed_edges) finer.collapsed_quads = collapse_folds(finer, finer.quad_choice(), progress);
+    const std::pair<int, int> left = quad_defects(finer, collapsed_edges);
+    if (!(left < fewest)) continue;
+    fewest = left;
+    finer.finer_edge_factor = factor;
+    best = std::move(finer);
+    if (left == std::make_pair(0, 0)) break;
+  }
+  return best;
 }
 
 void Session::rescue_failed_components(Job job, Progress& progress) {
@@ -545,19 +563,6 @@ void Session::collapse_folded_components(Progress& progress) {
   rescue_seconds = rescue_seconds.get<double>() + timer.seconds();
 }
 
-namespace {
-int quads_with_a_collapsed_edge(const QuadMesh& quads) {
-  int count = 0;
-  for (int q = 0; q < quads.num_quads(); ++q) count += quad_has_collapsed_edge(quads, q);
-  return count;
-}
-// Flipped quads, then quads with a collapsed edge, of the quads in use (fewer is better).
-std::pair<int, int> quad_defects(const ComponentState& state) {
-  const QuadChoice& choice = state.quad_choice();
-  return {choice.untangle.flipped_after, quads_with_a_collapsed_edge(choice.extraction.quads)};
-}
-}  // namespace
-
 void Session::refine_parts_with_collapsed_edges(Progress& progress) {
   Timer timer;
   const std::vector<double> targets = rescue_quad_targets();
@@ -566,40 +571,22 @@ void Session::refine_parts_with_collapsed_edges(Progress& progress) {
     if (state.quadded()) quads_made += state.quad_choice().extraction.quads.num_quads();
   for (size_t c = 0; c < components_.size(); ++c) {
     ComponentState& state = components_[c];
-    if (state.quadded() && !state.split_quads &&
-        state.quad_choice().extraction.quads.num_quads() <= kFinerFlipShare * quads_made &&
-        quad_defects(state).second > 0)
-      unfold_collapsed_edges_at_finer_density(state, targets[c], progress);
+    if (!state.quadded() || state.split_quads ||
+        state.quad_choice().extraction.quads.num_quads() > kFinerFlipShare * quads_made)
+      continue;
+    const int collapsed = quads_with_a_collapsed_edge(state.quad_choice().extraction.quads);
+    if (collapsed == 0) continue;
+    std::optional<ComponentState> best = quad_finer_with_fewer_defects(state, targets[c], true, progress);
+    if (!best) continue;
+    if (!best->failure)
+      best->failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
+                                  std::to_string(collapsed) +
+                                      " quad(s) kept a collapsed edge at the density asked (its quads fold "
+                                      "onto each other)"};
+    state = std::move(*best);
   }
   Json& rescue_seconds = report_["timings_s"]["rescue"];
   rescue_seconds = rescue_seconds.get<double>() + timer.seconds();
-}
-
-bool Session::unfold_collapsed_edges_at_finer_density(ComponentState& state, double target_quads, Progress& progress) {
-  const std::pair<int, int> own = quad_defects(state);
-  std::optional<ComponentState> best;
-  std::pair<int, int> fewest = own;
-  for (const double factor : kFinerEdgeFactors) {
-    if (factor >= state.finer_edge_factor) continue;
-    ComponentState finer = state;
-    finer.collapsed_quads.reset();
-    if (!quad_at_edge_factor(finer, factor, target_quads, Job::Remesh, progress)) continue;
-    finer.collapsed_quads = collapse_folds(finer, finer.quad_choice(), progress);
-    const std::pair<int, int> left = quad_defects(finer);
-    if (!(left < fewest)) continue;
-    fewest = left;
-    finer.finer_edge_factor = factor;
-    best = std::move(finer);
-    if (left == std::make_pair(0, 0)) break;
-  }
-  if (!best) return false;
-  if (!best->failure)
-    best->failure = PartFailure{"quad_extraction", ErrorCode::StageFailed,
-                                std::to_string(own.second) +
-                                    " quad(s) kept a collapsed edge at the density asked (its quads fold "
-                                    "onto each other)"};
-  state = std::move(*best);
-  return true;
 }
 
 void Session::mark_fields_without_cancelled_pairs() {

@@ -5,6 +5,7 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -115,11 +116,6 @@ class Session {
   // again alone at the finer densities of kFinerEdgeFactors, its folds collapsed, until one leaves
   // none flipped or collapsed; it takes the one that leaves fewest, if fewer than its own.
   void refine_parts_with_collapsed_edges(Progress& progress);
-  // That for one part: its quads at the finer densities of kFinerEdgeFactors (below its own) in
-  // turn, each with its folds collapsed, until one leaves none flipped or with a collapsed edge; it
-  // takes the one that leaves fewest (flipped, then collapsed), if fewer than its own (state
-  // unchanged otherwise).
-  bool unfold_collapsed_edges_at_finer_density(ComponentState& state, double target_quads, Progress& progress);
   // The component's quads at the finer densities of kFinerEdgeFactors, at most max_quads of them:
   // the first valid ones, or while quads stay flipped in them, those of the finer density that
   // leaves fewest flipped; false if none gives such quads (state unchanged then).
@@ -145,6 +141,12 @@ class Session {
   // turn until one has none flipped: it takes the quads of the one with fewest flipped, if fewer
   // than its own (state unchanged otherwise).
   bool unflip_at_finer_density(ComponentState& state, double target_quads, Progress& progress);
+  // The part's quads alone at the finer densities of kFinerEdgeFactors below its own, in turn (with
+  // collapsed_edges, each with its folds collapsed), until one leaves no flipped quad (nor, with
+  // collapsed_edges, one with a collapsed edge): the one that leaves fewest (flipped, then
+  // collapsed), if fewer than its own; none otherwise.
+  std::optional<ComponentState> quad_finer_with_fewer_defects(const ComponentState& state, double target_quads,
+                                                              bool collapsed_edges, Progress& progress);
   void collect_grid_uvs();
   // made_from: per input face, the (component, face) triangle made from it, or (-1, -1).
   void fill_missing_corner_uvs(const std::vector<std::pair<int, int>>& made_from);

@@ -397,7 +397,7 @@ UntangleStats collapse_folded_quads(QuadMesh& quads, const TriMesh& surface, con
   stats.collapsed_before = separated.collapsed_before;
   if (stats.flipped_before <= kMaxFlippedToCollapse) stats.collapsed_quads = collapser.run();
   stats.flipped_after = collapser.badness().flipped;
-  for (int q = 0; q < quads.num_quads(); ++q) stats.collapsed_after += quad_has_collapsed_edge(quads, q);
+  stats.collapsed_after = quads_with_a_collapsed_edge(quads);
   stats.moved_vertices = separated.moved_vertices;
   stats.seconds = timer.seconds();
   return stats;
