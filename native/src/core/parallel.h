@@ -2,16 +2,26 @@
 // the number of threads that ran them.
 #pragma once
 #include <algorithm>
+#include <cstdlib>
 #include <system_error>
 #include <thread>
 #include <vector>
 
 namespace qgp {
 
+// The machine's threads, or fewer where the environment's OMP_NUM_THREADS asks (the one setting that
+// also caps CHOLMOD's and OpenBLAS's threads).
+inline int machine_threads() {
+  const int machine = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const char* asked = std::getenv("OMP_NUM_THREADS");
+  const int limit = asked ? std::atoi(asked) : 0;
+  return limit > 0 ? std::min(machine, limit) : machine;
+}
+
 // Threads for `work` units of which each thread should get at least `min_work_per_thread`: at
-// least 1, at most `threads` (0: the machine's count) and 8.
+// least 1, at most `threads` (0: machine_threads()) and 8.
 inline int threads_for(double work, double min_work_per_thread, int threads = 0) {
-  const int machine = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
+  const int machine = threads > 0 ? threads : machine_threads();
   const int by_work = static_cast<int>(work / std::max(min_work_per_thread, 1.0));
   return std::max(1, std::min({machine, by_work, 8}));
 }

@@ -19,6 +19,12 @@ void Progress::update(double fraction) {
   if (callback_) callback_(stage_, range_begin_ + f * (range_end_ - range_begin_));
 }
 
+Progress Progress::without_callback() const {
+  Progress silent(Callback(), cancel_);
+  silent.stage_ = stage_;
+  return silent;
+}
+
 void Progress::check_cancel() const {
   if (cancel_requested()) throw Error(ErrorCode::Cancelled, "cancelled during stage '" + stage_ + "'");
 }

@@ -25,6 +25,9 @@ class Progress {
   void check_cancel() const;
   bool cancel_requested() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
   const std::string& stage() const { return stage_; }
+  // The same stage and cancel flag, without the callback: for work on another thread (a callback
+  // may only be called from the thread that owns it).
+  Progress without_callback() const;
 
  private:
   Callback callback_;
