@@ -5,8 +5,10 @@ For spot (500 quads), fandisk (sharp edges at 40 degrees, 500 quads), a multi-pa
 repairs (truck, 500 quads) and a cube of 8 x 8 square quads per side (300 quads; each square's two
 diagonals tie): a copy of the file with its faces shuffled and each face's corners rotated (the same surface, in
 the order another exporter or a new Blender mesh gives it), a second run of the same file, and a run with
-one OpenMP thread instead of two all write the same quad mesh, byte for byte, as the first run (the
-header comment, which names the input file, aside).
+one thread instead of two all write the same quad mesh, byte for byte, as the first run (the header
+comment, which names the input file, aside). OMP_NUM_THREADS caps CHOLMOD's and OpenBLAS's threads and
+the library's own (core/parallel.h): with two, truck's flip rounds run the trial one ring wider beside
+each trial and use it after the trial is not kept; with one, they run each trial in turn.
 """
 import argparse
 import os
@@ -43,7 +45,7 @@ def shuffled_copy(source, target, seed):
 
 
 def remesh(qgp, mesh, target, extra, out, threads):
-    """(exit status, the written OBJ without its comment lines) of one run with `threads` OpenMP threads."""
+    """(exit status, the written OBJ without its comment lines) of one run with `threads` threads."""
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     r = run(qgp, "remesh", mesh, "--faces", target, "-o", out, *extra, env=env)
     if not os.path.exists(out):

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/run_ahead.h"
 #include "core/timer.h"
 #include "igm/untangle_map.h"
 #include "intake/working_mesh.h"
@@ -110,6 +111,33 @@ LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>
   return flips;
 }
 
+// One flip round's trial: the zero T-edges within `rings` cells of the flipped layout quads of
+// `best` (the layout of quantization x) kept at length 1, the T-mesh quantized again and, unless it
+// has more than `most_quads` quads, its layout judged.
+struct FlipTrial {
+  bool nothing_to_try = false;  // no zero T-edge within `rings` cells
+  QuantizationOptions options;
+  QuantizationResult result;
+  bool too_many_quads = false;
+  LayoutFlips flips;
+};
+
+FlipTrial flip_trial(const ComponentState& state, const QuantizationOptions& options, const std::vector<int64_t>& x,
+                     const LayoutFlips& best, int rings, double most_quads, Progress& progress) {
+  FlipTrial trial;
+  const TMesh& tmesh = state.traced->tmesh;
+  const std::vector<int> edges = zero_edges_around(tmesh, best.layout, best.flipped, x, rings);
+  trial.nothing_to_try = edges.empty();
+  if (trial.nothing_to_try) return trial;
+  trial.options = options;
+  trial.options.min_length.resize(tmesh.edges.size(), 0);
+  for (int e : edges) trial.options.min_length[e] = 1;
+  trial.result = quantize(tmesh, trial.options, progress);
+  trial.too_many_quads = trial.result.quads_expected > most_quads;
+  if (!trial.too_many_quads) trial.flips = layout_flips(state, trial.result.x, progress);
+  return trial;
+}
+
 // Flip rounds: while the layout's quads stay flipped against the surface (they cross a thin or
 // sharply curved part: cells collapsed beside them squeeze the quads there), the zero T-edges around
 // their cells, then up to kMaxFlipRings cells away, are kept at length 1 and the T-mesh is
@@ -119,33 +147,34 @@ LayoutFlips layout_flips(const ComponentState& state, const std::vector<int64_t>
 void keep_zero_edges_where_layout_flips(const ComponentState& state, QuantizationOptions& options, Quantized& q,
                                         Progress& progress) {
   Timer timer;
-  const TMesh& tmesh = state.traced->tmesh;
   q.quads_before_flip_rounds = q.result.quads_expected;
-  const double most_quads = kMaxFlipRoundGrowth * q.result.quads_expected;
   LayoutFlips best = layout_flips(state, q.result.x, progress);
   q.flipped_layout_quads_before = best.valid ? best.count : -1;
   const bool hopeless = best.count > kMaxFlipShare * best.layout.quads.num_quads();
+  const double most_quads = kMaxFlipRoundGrowth * q.result.quads_expected;
+  // The trial one ring wider follows every trial not kept: it runs beside it (core/run_ahead.h).
+  RunAhead<FlipTrial> trials;
   for (int round = 0, rings = 0;
        !hopeless && best.valid && best.count > 0 && round < kMaxFlipRounds && rings <= kMaxFlipRings;) {
-    const std::vector<int> edges = zero_edges_around(tmesh, best.layout, best.flipped, q.result.x, rings);
-    if (edges.empty()) {
+    const bool next_may_follow = rings < kMaxFlipRings && round + 1 < kMaxFlipRounds;
+    const auto trial_at = [&](int r, Progress& p) {
+      return flip_trial(state, options, q.result.x, best, r, most_quads, p);
+    };
+    FlipTrial trial = trials.take(rings, next_may_follow, trial_at, progress);
+    if (trial.nothing_to_try) {
       ++rings;
       continue;
     }
     ++round;
-    QuantizationOptions trial = options;
-    trial.min_length.resize(tmesh.edges.size(), 0);
-    for (int e : edges) trial.min_length[e] = 1;
-    QuantizationResult result = quantize(tmesh, trial, progress);
-    if (result.quads_expected > most_quads) break;  // wider rings keep more edges at 1
-    LayoutFlips flips = layout_flips(state, result.x, progress);
-    if (!flips.better_than(best)) {
+    if (trial.too_many_quads) break;  // wider rings keep more edges at 1
+    if (!trial.flips.better_than(best)) {
       ++rings;
       continue;
     }
-    q.result = std::move(result);
-    options = std::move(trial);
-    best = std::move(flips);
+    trials.forget();
+    q.result = std::move(trial.result);
+    options = std::move(trial.options);
+    best = std::move(trial.flips);
     ++q.flip_rounds;
   }
   q.flipped_layout_quads = best.valid ? best.count : -1;
