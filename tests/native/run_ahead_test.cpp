@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -34,9 +36,10 @@ Search search(bool second_thread, int last, int failing, std::atomic<int>* calls
       if (i == failing) throw Error(ErrorCode::StageFailed, "step " + std::to_string(i) + " failed");
       return (state * 7 + i * 5) % 11;
     };
+    const auto not_kept = [](int v) { return v % 3 != 0; };
     int value = 0;
     try {
-      value = steps.take(index, index < last, step, progress);
+      value = steps.take(index, index < last, step, not_kept, progress);
     } catch (const Error& e) {
       out.taken.push_back(e.what());
       break;
@@ -89,13 +92,14 @@ TEST(RunAhead, AStepRunAheadRunsOnceAndAgainOnlyAfterForget) {
     ++calls[i];
     return 10 * state + i;
   };
-  EXPECT_EQ(steps.take(0, true, step, progress), 0);  // runs steps 0 and 1
-  EXPECT_EQ(steps.take(1, true, step, progress), 1);  // step 1's result, run ahead
-  EXPECT_EQ(steps.take(2, true, step, progress), 2);  // runs steps 2 and 3
+  const auto always = [](int) { return true; };
+  EXPECT_EQ(steps.take(0, true, step, always, progress), 0);  // runs steps 0 and 1
+  EXPECT_EQ(steps.take(1, true, step, always, progress), 1);  // step 1's result, run ahead
+  EXPECT_EQ(steps.take(2, true, step, always, progress), 2);  // runs steps 2 and 3
   EXPECT_EQ(calls, (std::vector<int>{1, 1, 1, 1}));
   state = 1;  // step 2 kept
   steps.forget();
-  EXPECT_EQ(steps.take(3, false, step, progress), 13);  // step 3 again, on the new state
+  EXPECT_EQ(steps.take(3, false, step, always, progress), 13);  // step 3 again, on the new state
   EXPECT_EQ(calls, (std::vector<int>{1, 1, 1, 2}));
   EXPECT_EQ(steps.steps_run_ahead(), 2);
 }
@@ -114,12 +118,13 @@ TEST(RunAhead, AnErrorOfAStepRunAheadIsThrownWhenThatStepIsAskedFor) {
     if (i == 1) throw Error(ErrorCode::StageFailed, "step 1 failed");
     return i;
   };
-  EXPECT_EQ(steps.take(0, true, step, progress), 0);  // step 1 ran ahead and failed
-  steps.forget();                                     // step 0 was kept: step 1 is not asked for
-  EXPECT_EQ(steps.take(0, false, step, progress), 0);
+  const auto always = [](int) { return true; };
+  EXPECT_EQ(steps.take(0, true, step, always, progress), 0);  // step 1 ran ahead and failed
+  steps.forget();                                             // step 0 was kept: step 1 is not asked for
+  EXPECT_EQ(steps.take(0, false, step, always, progress), 0);
   EXPECT_EQ(steps.steps_run_ahead(), 1);
-  EXPECT_EQ(steps.take(0, true, step, progress), 0);
-  EXPECT_THROW(steps.take(1, false, step, progress), Error);  // asked for after all
+  EXPECT_EQ(steps.take(0, true, step, always, progress), 0);
+  EXPECT_THROW(steps.take(1, false, step, always, progress), Error);  // asked for after all
 }
 
 // A cancel reaches the step on the second thread through its progress without callback, and leaves
@@ -138,13 +143,42 @@ TEST(RunAhead, ACancelStopsBothSteps) {
     }
     return i;
   };
+  const auto always = [](int) { return true; };
   try {
-    steps.take(0, true, step, progress);
+    steps.take(0, true, step, always, progress);
     ADD_FAILURE() << "no cancel";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::Cancelled);
   }
   EXPECT_EQ(ahead_cancelled.load(), 1);
+}
+
+// A step run ahead that the search will not ask for (needs_next is false for the step before it)
+// is cancelled at once: the call returns without waiting for it to finish.
+TEST(RunAhead, AStepRunAheadThatIsNotNeededIsCancelled) {
+  RunAhead<int> steps(true);
+  Progress progress;
+  std::atomic<int> cancelled{0};
+  const auto step = [&](int i, Progress& p) {
+    if (i == 0) return 0;
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start < std::chrono::seconds(30)) {
+      try {
+        p.check_cancel();
+      } catch (const Error&) {
+        ++cancelled;
+        throw;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return i;
+  };
+  const auto never = [](int) { return false; };
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(steps.take(0, true, step, never, progress), 0);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_EQ(cancelled.load(), 1);
+  EXPECT_EQ(steps.steps_run_ahead(), 1);
 }
 
 }  // namespace

@@ -19,8 +19,9 @@ void Progress::update(double fraction) {
   if (callback_) callback_(stage_, range_begin_ + f * (range_end_ - range_begin_));
 }
 
-Progress Progress::without_callback() const {
+Progress Progress::without_callback(const std::atomic<bool>* also) const {
   Progress silent(Callback(), cancel_);
+  silent.also_cancel_ = also ? also : also_cancel_;
   silent.stage_ = stage_;
   return silent;
 }

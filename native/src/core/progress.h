@@ -23,15 +23,19 @@ class Progress {
   void set_range(double begin, double end) { range_begin_ = begin, range_end_ = end; }
   // Throws Error(Cancelled) if cancel was requested; call it often in loops (well below 1 s apart).
   void check_cancel() const;
-  bool cancel_requested() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
+  bool cancel_requested() const {
+    return (cancel_ && cancel_->load(std::memory_order_relaxed)) ||
+           (also_cancel_ && also_cancel_->load(std::memory_order_relaxed));
+  }
   const std::string& stage() const { return stage_; }
   // The same stage and cancel flag, without the callback: for work on another thread (a callback
-  // may only be called from the thread that owns it).
-  Progress without_callback() const;
+  // may only be called from the thread that owns it); `also`, when given, cancels it too.
+  Progress without_callback(const std::atomic<bool>* also = nullptr) const;
 
  private:
   Callback callback_;
   const std::atomic<bool>* cancel_ = nullptr;
+  const std::atomic<bool>* also_cancel_ = nullptr;
   std::string stage_;
   double range_begin_ = 0, range_end_ = 1;
 };

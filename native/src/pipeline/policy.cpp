@@ -160,7 +160,11 @@ void keep_zero_edges_where_layout_flips(const ComponentState& state, Quantizatio
     const auto trial_at = [&](int r, Progress& p) {
       return flip_trial(state, options, q.result.x, best, r, most_quads, p);
     };
-    FlipTrial trial = trials.take(rings, next_may_follow, trial_at, progress);
+    // The rounds go on to the next ring after a trial with nothing to try or not kept.
+    const auto goes_on = [&](const FlipTrial& t) {
+      return t.nothing_to_try || (!t.too_many_quads && !t.flips.better_than(best));
+    };
+    FlipTrial trial = trials.take(rings, next_may_follow, trial_at, goes_on, progress);
     if (trial.nothing_to_try) {
       ++rings;
       continue;

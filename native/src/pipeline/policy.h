@@ -190,9 +190,9 @@ std::vector<char> sharp_tip_vertices(const TriMesh& mesh);
 // the part is thin or sharply curved), the zero edges around their cells are kept at 1 the same
 // way, up to kMaxFlipRounds times and kMaxFlipRings cells away; a round is kept only when it leaves
 // fewer flipped quads in a valid layout, with at most kMaxFlipRoundGrowth times the quads; the
-// round one ring wider, which follows each round not kept, runs beside it on a second thread
-// (core/run_ahead.h: the same rounds and quads with one thread). The quads keep their size where
-// that needs no collapse.
+// round one ring wider, which follows each round not kept, runs beside it on a second thread and is
+// cancelled when the round is kept (core/run_ahead.h: the same rounds and quads with one thread).
+// The quads keep their size where that needs no collapse.
 Quantized quantize_without_folds(const ComponentState& state, QuantizationResult first, Progress& progress);
 
 // Re-quantizations that move the scale toward a component's share of the quad count asked...
