@@ -165,16 +165,12 @@ void keep_zero_edges_where_layout_flips(const ComponentState& state, Quantizatio
       return t.nothing_to_try || (!t.too_many_quads && !t.flips.better_than(best));
     };
     FlipTrial trial = trials.take(rings, next_may_follow, trial_at, goes_on, progress);
-    if (trial.nothing_to_try) {
+    round += !trial.nothing_to_try;
+    if (goes_on(trial)) {
       ++rings;
       continue;
     }
-    ++round;
     if (trial.too_many_quads) break;  // wider rings keep more edges at 1
-    if (!trial.flips.better_than(best)) {
-      ++rings;
-      continue;
-    }
     trials.forget();
     q.result = std::move(trial.result);
     options = std::move(trial.options);
